@@ -1,0 +1,36 @@
+# SARAS MULTIROBOTS-SURGERY platform — entry points.
+#   make demo   install what is missing, build, run the platform headless, write OUT/
+#   make test   install what is missing, build, run every test suite
+# Everything runs with Debian's /usr/bin/python3 and ROS Noetic (see scripts/env.sh).
+SHELL := /bin/bash
+DURATION ?= 30
+OUT ?= $(CURDIR)/out/demo
+ARGS ?=
+
+.PHONY: all setup build test demo bench lint run clean
+
+all: build
+
+setup:
+	@bash scripts/setup.sh
+
+build: setup
+	@bash scripts/build.sh
+
+test: build
+	@bash scripts/run_tests.sh
+
+demo: build
+	@bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
+
+run: build
+	@bash -c 'source scripts/env.sh && roslaunch launch/platform.launch $(ARGS)'
+
+bench: build
+	@bash scripts/bench.sh
+
+lint: setup
+	@bash -c 'source scripts/env.sh && catkin_lint -W2 --strict src'
+
+clean:
+	rm -rf build devel install out

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Run every test suite of the workspace and print one summary line per suite and a total.
+#   1. catkin_lint (strict)              2. pytest: core modules + workspace tests (no roscore)
+#   3. gtest + rostest through catkin's run_tests, checked with catkin_test_results
+# Exit status is non-zero if any suite failed. Assumes `scripts/build.sh` ran (make test does).
+set -uo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck disable=SC1091
+source "$here/env.sh"
+cd "$SARAS_WS"
+export ROS_HOME="${ROS_HOME:-$SARAS_WS/build/ros_home}"
+export ROS_LOG_DIR="$ROS_HOME/log"
+mkdir -p "$ROS_LOG_DIR"
+results_dir="$SARAS_WS/build/test_results"
+failed_suites=()
+total_pass=0; total_fail=0; total_skip=0
+
+echo "=== catkin_lint ==="
+if catkin_lint -W2 --strict --ignore missing_directory src; then
+  echo "catkin_lint: clean"; total_pass=$((total_pass+1))
+else
+  failed_suites+=(catkin_lint); total_fail=$((total_fail+1))
+fi
+
+echo "=== pytest (core modules, workspace tests) ==="
+mkdir -p "$results_dir/pytest"
+python3 -m pytest -q -rs --junitxml="$results_dir/pytest/pytest.xml" ${PYTEST_ARGS:-}
+rc=$?
+if [ $rc -ne 0 ] && [ $rc -ne 5 ]; then failed_suites+=(pytest); fi
+read -r p f s < <(python3 "$here/junit_counts.py" "$results_dir/pytest/pytest.xml")
+total_pass=$((total_pass+p)); total_fail=$((total_fail+f)); total_skip=$((total_skip+s))
+
+echo "=== gtest + rostest (catkin run_tests) ==="
+rm -rf "$results_dir/catkin"; mkdir -p "$results_dir/catkin"
+make -C build -j"${JOBS:-$(nproc)}" --no-print-directory tests >/dev/null || failed_suites+=(build-tests)
+CATKIN_TEST_RESULTS_DIR="$results_dir/catkin" \
+  make -C build -j1 --no-print-directory run_tests CATKIN_TEST_RESULTS_DIR="$results_dir/catkin" \
+  > "$results_dir/run_tests.log" 2>&1
+grep -E "^\[ *(OK|FAILED|PASSED) *\]|^\[Testcase|FAILURE|ERROR:|rostest.*(PASS|FAIL)" "$results_dir/run_tests.log" | tail -n 200
+if ! catkin_test_results "$SARAS_WS/build/test_results" --all > "$results_dir/catkin_summary.txt" 2>&1; then
+  failed_suites+=(catkin_run_tests)
+fi
+grep -vE "^Skipping" "$results_dir/catkin_summary.txt" | tail -n 40
+read -r p f s < <(python3 "$here/junit_counts.py" $(find "$results_dir" -name '*.xml' -not -path '*/pytest/*'))
+total_pass=$((total_pass+p)); total_fail=$((total_fail+f)); total_skip=$((total_skip+s))
+
+echo
+if [ ${#failed_suites[@]} -ne 0 ]; then
+  echo "FAILED suites: ${failed_suites[*]}"
+  [ $total_fail -eq 0 ] && total_fail=${#failed_suites[@]}
+fi
+echo "total: ${total_pass} passed, ${total_fail} failed, ${total_skip} skipped"
+[ ${#failed_suites[@]} -eq 0 ]

@@ -1,0 +1,1 @@
+"""SARAS platform drivers and simulators: ROS-agnostic cores (no rospy import here)."""
