@@ -1,5 +1,9 @@
 #!/usr/bin/env bash
-# Configure and build the catkin workspace (build/ and devel/ at the repository root).
+# Configure and build the catkin workspace.
+#   BUILD_DIR / DEVEL_DIR  where to build (default build/ and devel/ at the repository root)
+#   PACKAGES               optional ';'-separated whitelist (e.g. "saras_msgs;saras_collision")
+#   BUILD_TYPE, JOBS       CMake build type (RelWithDebInfo) and make -j (nproc)
+# Extra arguments are passed to make (e.g. a target name).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 # shellcheck disable=SC1091
@@ -7,10 +11,11 @@ source "$here/env.sh"
 cd "$SARAS_WS"
 BUILD_TYPE="${BUILD_TYPE:-RelWithDebInfo}"
 JOBS="${JOBS:-$(nproc)}"
-mkdir -p build devel
-touch build/CATKIN_IGNORE devel/CATKIN_IGNORE
-cmake -S . -B build -DCATKIN_DEVEL_PREFIX="$SARAS_WS/devel" \
+mkdir -p "$BUILD_DIR" "$DEVEL_DIR"
+touch "$BUILD_DIR/CATKIN_IGNORE" "$DEVEL_DIR/CATKIN_IGNORE"
+cmake -S . -B "$BUILD_DIR" -DCATKIN_DEVEL_PREFIX="$DEVEL_DIR" \
   -DCMAKE_INSTALL_PREFIX="$SARAS_WS/install" -DCMAKE_BUILD_TYPE="$BUILD_TYPE" \
-  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON > build/cmake.log \
-  || { cat build/cmake.log; exit 1; }
-make -C build -j"$JOBS" --no-print-directory "$@"
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_ENABLE_TESTING=ON \
+  -DCATKIN_WHITELIST_PACKAGES="${PACKAGES:-}" > "$BUILD_DIR/cmake.log" 2>&1 \
+  || { cat "$BUILD_DIR/cmake.log"; exit 1; }
+make -C "$BUILD_DIR" -j"$JOBS" --no-print-directory "$@"

@@ -8,10 +8,10 @@ here="$(cd "$(dirname "$0")" && pwd)"
 # shellcheck disable=SC1091
 source "$here/env.sh"
 cd "$SARAS_WS"
-export ROS_HOME="${ROS_HOME:-$SARAS_WS/build/ros_home}"
+export ROS_HOME="${ROS_HOME:-$BUILD_DIR/ros_home}"
 export ROS_LOG_DIR="$ROS_HOME/log"
 mkdir -p "$ROS_LOG_DIR"
-results_dir="$SARAS_WS/build/test_results"
+results_dir="$BUILD_DIR/test_results"
 failed_suites=()
 total_pass=0; total_fail=0; total_skip=0
 
@@ -31,16 +31,14 @@ read -r p f s < <(python3 "$here/junit_counts.py" "$results_dir/pytest/pytest.xm
 total_pass=$((total_pass+p)); total_fail=$((total_fail+f)); total_skip=$((total_skip+s))
 
 echo "=== gtest + rostest (catkin run_tests) ==="
-rm -rf "$results_dir/catkin"; mkdir -p "$results_dir/catkin"
-make -C build -j"${JOBS:-$(nproc)}" --no-print-directory tests >/dev/null || failed_suites+=(build-tests)
-CATKIN_TEST_RESULTS_DIR="$results_dir/catkin" \
-  make -C build -j1 --no-print-directory run_tests CATKIN_TEST_RESULTS_DIR="$results_dir/catkin" \
-  > "$results_dir/run_tests.log" 2>&1
-grep -E "^\[ *(OK|FAILED|PASSED) *\]|^\[Testcase|FAILURE|ERROR:|rostest.*(PASS|FAIL)" "$results_dir/run_tests.log" | tail -n 200
-if ! catkin_test_results "$SARAS_WS/build/test_results" --all > "$results_dir/catkin_summary.txt" 2>&1; then
+find "$results_dir" -mindepth 1 -maxdepth 1 -not -name pytest -exec rm -rf {} +
+make -C "$BUILD_DIR" -j"${JOBS:-$(nproc)}" --no-print-directory tests >/dev/null || failed_suites+=(build-tests)
+make -C "$BUILD_DIR" -j1 --no-print-directory run_tests > "$BUILD_DIR/run_tests.log" 2>&1
+grep -E "^\[ *(OK|FAILED|PASSED) *\]|^\[Testcase|FAILURE|ERROR:|rostest.*(PASS|FAIL)" "$BUILD_DIR/run_tests.log" | tail -n 200
+if ! catkin_test_results "$results_dir" --all > "$BUILD_DIR/catkin_summary.txt" 2>&1; then
   failed_suites+=(catkin_run_tests)
 fi
-grep -vE "^Skipping" "$results_dir/catkin_summary.txt" | tail -n 40
+grep -vE "^Skipping" "$BUILD_DIR/catkin_summary.txt" | tail -n 40
 read -r p f s < <(python3 "$here/junit_counts.py" $(find "$results_dir" -name '*.xml' -not -path '*/pytest/*'))
 total_pass=$((total_pass+p)); total_fail=$((total_fail+f)); total_skip=$((total_skip+s))
 

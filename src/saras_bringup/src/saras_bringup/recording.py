@@ -1,0 +1,244 @@
+"""The recording list of the ROS core & data-recording node and the check of a recorded bag.
+
+``load_recording_config`` validates ``config/recording.yaml``; ``rosbag_command`` turns it into the
+``rosbag record`` command line (bounded buffer, explicit topic list); ``check_bag`` measures every
+stream in a bag: message count, rate, sequence gaps (``header.seq`` jumps of a single publisher) and
+stamp gaps (intervals longer than ``gap_factor / rate``). rosbag's own "dropped" warnings are
+throttled and undercount, so the bag itself is the evidence.
+
+Only ``check_bag`` needs the ``rosbag`` Python module; it is imported lazily.
+"""
+import struct
+
+import yaml
+
+
+class RecordingConfigError(ValueError):
+    """An invalid recording configuration (the message names the entry and field)."""
+
+
+class Stream(object):
+    __slots__ = ('topic', 'rate', 'group', 'required', 'header')
+
+    def __init__(self, topic, rate, group, required, header):
+        self.topic, self.rate, self.group = topic, rate, group
+        self.required, self.header = required, header
+
+
+class RecordingConfig(object):
+    def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb):
+        self.streams = streams
+        self.min_rate_fraction = min_rate_fraction
+        self.gap_factor = gap_factor
+        self.buffer_mb = buffer_mb
+        self.chunk_kb = chunk_kb
+
+    @property
+    def topics(self):
+        return [s.topic for s in self.streams]
+
+
+def _number(data, key, default, low, high):
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (low <= value <= high):
+        raise RecordingConfigError('"%s" must be a number in [%g, %g], got %r' % (key, low, high, value))
+    return value
+
+
+def parse_recording_config(data):
+    if not isinstance(data, dict) or not isinstance(data.get('streams'), list) or not data['streams']:
+        raise RecordingConfigError('expected a mapping with a non-empty "streams" list')
+    streams, seen = [], set()
+    for i, entry in enumerate(data['streams']):
+        if not isinstance(entry, dict):
+            raise RecordingConfigError('streams[%d] is not a mapping' % i)
+        topic = entry.get('topic')
+        if not isinstance(topic, str) or not topic.startswith('/'):
+            raise RecordingConfigError('streams[%d]: "topic" must be an absolute name, got %r' % (i, topic))
+        if topic in seen:
+            raise RecordingConfigError('streams[%d]: topic %s listed twice' % (i, topic))
+        seen.add(topic)
+        rate = entry.get('rate')
+        if isinstance(rate, bool) or not isinstance(rate, (int, float)) or rate < 0 or rate > 1e5:
+            raise RecordingConfigError('streams[%d] (%s): "rate" must be a number in [0, 1e5] Hz, got %r'
+                                       % (i, topic, rate))
+        streams.append(Stream(topic, float(rate), str(entry.get('group', 'other')),
+                              bool(entry.get('required', True)), bool(entry.get('header', True))))
+    return RecordingConfig(streams,
+                           float(_number(data, 'min_rate_fraction', 0.8, 0.0, 1.0)),
+                           float(_number(data, 'gap_factor', 3.0, 1.0, 100.0)),
+                           int(_number(data, 'buffer_mb', 1024, 16, 65536)),
+                           int(_number(data, 'chunk_kb', 4096, 64, 1048576)))
+
+
+def load_recording_config(path):
+    try:
+        with open(path) as stream:
+            data = yaml.safe_load(stream)
+    except (OSError, yaml.YAMLError) as exc:
+        raise RecordingConfigError('cannot read %s: %s' % (path, exc))
+    try:
+        return parse_recording_config(data)
+    except RecordingConfigError as exc:
+        raise RecordingConfigError('%s: %s' % (path, exc))
+
+
+def rosbag_command(config, output, extra_topics=()):
+    """``rosbag record`` argv for the configured streams, writing ``output`` (a .bag path)."""
+    return (['rosbag', 'record', '--tcpnodelay', '-O', output,
+             '--buffsize=%d' % config.buffer_mb, '--chunksize=%d' % config.chunk_kb]
+            + config.topics + list(extra_topics))
+
+
+_HEADER = struct.Struct('<III')  # std_msgs/Header starts with uint32 seq, time stamp (secs, nsecs)
+
+
+class StreamStats(object):
+    """What the bag holds for one topic."""
+
+    def __init__(self, topic):
+        self.topic = topic
+        self.msg_type = ''
+        self.count = 0
+        self.first = None          # bag receive time of the first / last message [s]
+        self.last = None
+        self.seq_gaps = 0          # messages missing according to header.seq
+        self.stamp_gaps = 0        # intervals longer than gap_factor / rate
+        self.max_interval = 0.0    # longest interval between consecutive messages [s]
+        self._prev_seq = None
+        self._prev_t = None
+
+    @property
+    def duration(self):
+        return (self.last - self.first) if self.count > 1 else 0.0
+
+    @property
+    def rate(self):
+        return (self.count - 1) / self.duration if self.duration > 0 else 0.0
+
+    def add(self, t_receive, header):
+        """Account one message: receive time [s] and (seq, stamp [s]) or None when headerless."""
+        self.count += 1
+        if self.first is None:
+            self.first = t_receive
+        self.last = t_receive
+        t = t_receive
+        if header is not None:
+            seq, stamp = header
+            if stamp > 0:
+                t = stamp
+            if self._prev_seq is not None and seq > self._prev_seq + 1 and self._prev_seq != 0:
+                self.seq_gaps += seq - self._prev_seq - 1
+            self._prev_seq = seq
+        if self._prev_t is not None:
+            self.max_interval = max(self.max_interval, t - self._prev_t)
+        self._prev_t = t
+
+    def finish(self, nominal_rate, gap_factor, intervals):
+        if nominal_rate > 0:
+            limit = gap_factor / nominal_rate
+            self.stamp_gaps = sum(1 for dt in intervals if dt > limit)
+
+
+def check_bag(bag_path, config, topics=None):
+    """Measure every configured stream in ``bag_path``.
+
+    Returns (results, problems): ``results`` is a list of dicts (one per configured stream plus any
+    other recorded topic) and ``problems`` a list of human-readable failures for required streams
+    (missing, too slow, or with lost messages).
+    """
+    import rosbag  # noqa: delayed so that the pure functions above work without ROS
+
+    wanted = {s.topic: s for s in config.streams}
+    stats, intervals, last_t = {}, {}, {}
+    with rosbag.Bag(bag_path) as bag:
+        info = bag.get_type_and_topic_info().topics
+        for topic, tinfo in info.items():
+            stats[topic] = StreamStats(topic)
+            stats[topic].msg_type = tinfo.msg_type
+            intervals[topic] = []
+        for topic, raw, t in bag.read_messages(topics=topics, raw=True):
+            stream = wanted.get(topic)
+            data = raw[1]
+            header = None
+            if stream is None or stream.header:
+                if len(data) >= _HEADER.size and _has_header(raw[0]):
+                    seq, secs, nsecs = _HEADER.unpack_from(data, 0)
+                    header = (seq, secs + 1e-9 * nsecs)
+            st = stats[topic]
+            tr = t.to_sec()
+            ts = header[1] if header is not None and header[1] > 0 else tr
+            if topic in last_t:
+                intervals[topic].append(ts - last_t[topic])
+            last_t[topic] = ts
+            st.add(tr, header)
+    results, problems = [], []
+    for topic, st in stats.items():
+        stream = wanted.get(topic)
+        rate = stream.rate if stream else 0.0
+        st.finish(rate, config.gap_factor, intervals[topic])
+    for stream in config.streams:
+        st = stats.get(stream.topic)
+        row = {'topic': stream.topic, 'group': stream.group, 'nominal_rate': stream.rate,
+               'required': stream.required, 'count': 0, 'rate': 0.0, 'seq_gaps': 0,
+               'stamp_gaps': 0, 'max_interval': 0.0, 'type': '', 'ok': False}
+        if st is not None and st.count > 0:
+            row.update(count=st.count, rate=st.rate, seq_gaps=st.seq_gaps, stamp_gaps=st.stamp_gaps,
+                       max_interval=st.max_interval, type=st.msg_type)
+        verdict = _verdict(stream, row, config)
+        row['ok'] = verdict is None
+        row['problem'] = verdict or ''
+        if verdict and stream.required:
+            problems.append('%s (%s): %s' % (stream.topic, stream.group, verdict))
+        results.append(row)
+    for topic, st in sorted(stats.items()):
+        if topic not in wanted:
+            results.append({'topic': topic, 'group': 'extra', 'nominal_rate': 0.0, 'required': False,
+                            'count': st.count, 'rate': st.rate, 'seq_gaps': st.seq_gaps,
+                            'stamp_gaps': 0, 'max_interval': st.max_interval, 'type': st.msg_type,
+                            'ok': True, 'problem': ''})
+    return results, problems
+
+
+_HEADER_TYPES_CACHE = {}
+
+
+def _has_header(msg_type):
+    """True when the ROS message type starts with a std_msgs/Header (looked up once per type)."""
+    if msg_type not in _HEADER_TYPES_CACHE:
+        try:
+            import roslib.message
+            cls = roslib.message.get_message_class(msg_type)
+            _HEADER_TYPES_CACHE[msg_type] = bool(cls and cls._has_header)
+        except Exception:  # unknown type in this environment: judge on receive time only
+            _HEADER_TYPES_CACHE[msg_type] = False
+    return _HEADER_TYPES_CACHE[msg_type]
+
+
+def _verdict(stream, row, config):
+    if row['count'] == 0:
+        return 'not recorded'
+    if stream.rate > 0:
+        if row['rate'] < config.min_rate_fraction * stream.rate:
+            return 'rate %.1f Hz below %.0f %% of nominal %.0f Hz' % (
+                row['rate'], 100 * config.min_rate_fraction, stream.rate)
+        if row['seq_gaps'] > 0:
+            return '%d messages lost (header.seq gaps)' % row['seq_gaps']
+    return None
+
+
+def format_table(results):
+    lines = ['%-44s %-22s %8s %9s %9s %6s %6s  %s' % (
+        'topic', 'group', 'count', 'rate[Hz]', 'nominal', 'seqgap', 'tgap', 'status')]
+    for r in results:
+        status = 'ok' if r['ok'] else ('MISSING' if r['count'] == 0 else 'FAIL')
+        if not r['required'] and not r['ok']:
+            status = 'optional: ' + r['problem']
+        elif not r['ok']:
+            status += ': ' + r['problem']
+        lines.append('%-44s %-22s %8d %9.1f %9s %6d %6d  %s' % (
+            r['topic'], r['group'][:22], r['count'], r['rate'],
+            ('%.0f' % r['nominal_rate']) if r['nominal_rate'] > 0 else '-',
+            r['seq_gaps'], r['stamp_gaps'], status))
+    return '\n'.join(lines)
+

@@ -1,0 +1,237 @@
+"""Demo report: plots and an index.html from a platform recording.
+
+``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
+master vs slave trajectory per channel, tool distances with the thresholds, tank energies, contact
+forces, the augmented endoscope frame and rviz screenshot (files produced live by the demo and
+passed in ``extras``), and the table of recorded topics. A plot whose topics are absent from the
+bag is listed as "not recorded" instead of silently disappearing.
+"""
+import html
+import os
+
+import numpy as np
+
+import matplotlib
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+
+SIDES = ('left', 'right')
+TOOLS = ('mesa_left', 'mesa_right', 'PSM1', 'PSM2')
+
+
+def read_series(bag, topics):
+    """{topic: list of (t_bag [s], msg)} for the given topics (deserialized)."""
+    out = {t: [] for t in topics}
+    for topic, msg, t in bag.read_messages(topics=list(topics)):
+        out[topic].append((t.to_sec(), msg))
+    return out
+
+
+def _positions(series):
+    if not series:
+        return np.zeros(0), np.zeros((0, 3))
+    t = np.array([s[0] for s in series])
+    p = np.array([[m.pose.position.x, m.pose.position.y, m.pose.position.z] for _, m in series])
+    return t, p
+
+
+def _scalar(series, index=None):
+    if not series:
+        return np.zeros(0), np.zeros(0)
+    t = np.array([s[0] for s in series])
+    if index is None:
+        v = np.array([float(m.data) for _, m in series])
+    else:
+        v = np.array([m.data[index] if len(m.data) > index else np.nan for _, m in series])
+    return t, v
+
+
+class Report(object):
+    def __init__(self, out_dir, t0):
+        self.out_dir = out_dir
+        self.t0 = t0
+        self.sections = []   # (title, html)
+
+    def figure(self, name, title, draw, caption=''):
+        fig = draw()
+        if fig is None:
+            self.sections.append((title, '<p class="missing">not recorded: %s</p>' % html.escape(caption)))
+            return None
+        path = os.path.join(self.out_dir, name)
+        fig.savefig(path, dpi=90, bbox_inches='tight')
+        plt.close(fig)
+        self.sections.append((title, '<img src="%s" alt="%s"/><p>%s</p>' % (
+            name, html.escape(title), html.escape(caption))))
+        return path
+
+
+def plot_trajectories(data, side, scale, t0):
+    tm, pm = _positions(data.get('/teleop/%s/master_pose' % side, []))
+    ts, ps = _positions(data.get('/mesa_%s/ee_pose' % side, []))
+    tt, pt = _positions(data.get('/mesa_%s/target_pose' % side, []))
+    if len(ts) == 0 or len(tm) == 0:
+        return None
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    for k, ax in enumerate(axes):
+        ax.plot(tm - t0, 1e3 * scale * (pm[:, k] - pm[0, k]), label='master x scale (%.2f)' % scale, lw=1)
+        if len(tt):
+            ax.plot(tt - t0, 1e3 * (pt[:, k] - ps[0, k]), '--', label='slave set-point', lw=1)
+        ax.plot(ts - t0, 1e3 * (ps[:, k] - ps[0, k]), label='slave measured', lw=1)
+        ax.set_ylabel('%s [mm]' % 'xyz'[k])
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc='upper right', fontsize=8)
+    axes[0].set_title('%s channel: displacement from start in mesa_%s/sbs_world' % (side, side))
+    axes[-1].set_xlabel('time [s]')
+    return fig
+
+
+def plot_distances(data, thresholds, t0):
+    series = data.get('/collision/distances', [])
+    if not series:
+        return None
+    fig, ax = plt.subplots(figsize=(9, 4))
+    for i, name in enumerate(TOOLS):
+        t, v = _scalar(series, i)
+        ax.plot(t - t0, 1e3 * v, label=name, lw=1)
+    colours = {'collision': 'red', 'warning': 'orange'}
+    for key, value in thresholds.items():
+        ax.axhline(1e3 * value, color=colours.get(key, 'gray'), ls='--', lw=1,
+                   label='%s threshold %.0f mm' % (key, 1e3 * value))
+    ax.set_ylabel('minimum distance [mm]')
+    ax.set_xlabel('time [s]')
+    ax.set_ylim(bottom=min(-5.0, ax.get_ylim()[0]), top=min(ax.get_ylim()[1], 150.0))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, ncol=3)
+    ax.set_title('/collision/distances (tool-tool and tool-bone)')
+    return fig
+
+
+def plot_energies(data, t0, limits):
+    names = ('/teleop/tank_master/energy', '/teleop/tank_slave/energy')
+    if not any(data.get(n) for n in names):
+        return None
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    for n in names:
+        t, v = _scalar(data.get(n, []))
+        if len(t):
+            ax.plot(t - t0, v, label=n.split('/')[2], lw=1)
+    for key, value in limits.items():
+        ax.axhline(value, color='gray', ls=':', lw=1)
+        ax.text(ax.get_xlim()[0], value, ' ' + key, fontsize=7, va='bottom', color='gray')
+    ax.set_ylabel('tank energy T [J]')
+    ax.set_xlabel('time [s]')
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title('Energy tanks (passivity layer)')
+    return fig
+
+
+def plot_forces(data, t0):
+    names = ['/mesa_%s/contact_force' % s for s in SIDES]
+    if not any(data.get(n) for n in names):
+        return None
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    for n in names:
+        series = data.get(n, [])
+        if series:
+            t = np.array([s[0] for s in series])
+            f = np.array([np.linalg.norm([m.linear.x, m.linear.y, m.linear.z]) for _, m in series])
+            ax.plot(t - t0, f, label=n, lw=1)
+    ax.set_ylabel('|contact force| [N]')
+    ax.set_xlabel('time [s]')
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title('Vision-based contact forces (D7.2 Section 8)')
+    return fig
+
+
+def find_param(params, key):
+    """First value of ``key`` anywhere in a nested rosparam dump (or None)."""
+    if isinstance(params, dict):
+        if key in params and isinstance(params[key], (int, float)):
+            return params[key]
+        for v in params.values():
+            found = find_param(v, key)
+            if found is not None:
+                return found
+    return None
+
+
+def topic_table_html(results):
+    rows = ['<tr><th>topic</th><th>group</th><th>type</th><th>messages</th><th>rate [Hz]</th>'
+            '<th>nominal [Hz]</th><th>seq gaps</th><th>stamp gaps</th><th>status</th></tr>']
+    for r in results:
+        status = 'ok' if r['ok'] else (r.get('problem') or 'missing')
+        cls = 'ok' if r['ok'] else ('bad' if r['required'] else 'warn')
+        rows.append('<tr class="%s"><td>%s</td><td>%s</td><td>%s</td><td>%d</td><td>%.1f</td>'
+                    '<td>%s</td><td>%d</td><td>%d</td><td>%s</td></tr>' % (
+                        cls, html.escape(r['topic']), html.escape(r['group']),
+                        html.escape(r.get('type', '')), r['count'], r['rate'],
+                        ('%.0f' % r['nominal_rate']) if r['nominal_rate'] > 0 else '-',
+                        r['seq_gaps'], r['stamp_gaps'], html.escape(status)))
+    return '<table>%s</table>' % '\n'.join(rows)
+
+
+CSS = """body{font-family:sans-serif;margin:2em;max-width:1100px}img{max-width:100%;border:1px solid #ccc}
+table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px}
+tr.bad{background:#fdd}tr.warn{background:#ffd}.missing{color:#a00}h2{margin-top:1.5em}"""
+
+
+def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=None, summary=''):
+    """Write the plots and index.html into ``out_dir``; returns the index path.
+
+    check: dict with 'results' and 'problems' (from bag_check --json); params: rosparam dump (dict);
+    extras: list of (title, png path relative to out_dir, caption) for live captures.
+    """
+    import rosbag
+    os.makedirs(out_dir, exist_ok=True)
+    params = params or {}
+    thresholds = thresholds or {
+        'collision': float(find_param(params, 'collision_threshold') or 0.005),
+        'warning': float(find_param(params, 'warning_threshold') or 0.02)}
+    scale = float(find_param(params, 'scale_factor') or 1.0)
+    limits = {}
+    for key in ('T_max', 'T_ava', 'T_req', 'T_min'):
+        v = find_param(params, key)
+        if v is not None:
+            limits[key] = float(v)
+    topics = ['/teleop/%s/master_pose' % s for s in SIDES] + ['/mesa_%s/ee_pose' % s for s in SIDES]
+    topics += ['/mesa_%s/target_pose' % s for s in SIDES] + ['/mesa_%s/contact_force' % s for s in SIDES]
+    topics += ['/collision/distances', '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
+    with rosbag.Bag(bag_path) as bag:
+        t0 = bag.get_start_time()
+        data = read_series(bag, topics)
+    rep = Report(out_dir, t0)
+    for side in SIDES:
+        rep.figure('trajectory_%s.png' % side, 'Master vs slave trajectory, %s channel' % side,
+                   lambda: plot_trajectories(data, side, scale, t0),
+                   '/teleop/%s/master_pose (scaled by %.2f), /mesa_%s/target_pose, /mesa_%s/ee_pose'
+                   % (side, scale, side, side))
+    rep.figure('distances.png', 'Tool distances', lambda: plot_distances(data, thresholds, t0),
+               '/collision/distances with the collision (red) and warning (orange) thresholds')
+    rep.figure('energies.png', 'Tank energies', lambda: plot_energies(data, t0, limits),
+               '/teleop/tank_master/energy and /teleop/tank_slave/energy')
+    rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
+               '/mesa_left/contact_force, /mesa_right/contact_force')
+    for title, rel, caption in (extras or []):
+        if rel and os.path.exists(os.path.join(out_dir, rel)):
+            rep.sections.append((title, '<img src="%s" alt="%s"/><p>%s</p>' % (
+                rel, html.escape(title), html.escape(caption))))
+        else:
+            rep.sections.append((title, '<p class="missing">not captured: %s</p>' % html.escape(caption)))
+    problems = check.get('problems', []) if check else []
+    body = ['<h1>SARAS MULTIROBOTS-SURGERY platform: demo report</h1>',
+            '<p>Recording: <code>%s</code></p>' % html.escape(os.path.abspath(bag_path)),
+            '<p>%s</p>' % html.escape(summary)]
+    if problems:
+        body.append('<h2>Problems</h2><ul>%s</ul>' % ''.join(
+            '<li class="missing">%s</li>' % html.escape(p) for p in problems))
+    for title, content in rep.sections:
+        body.append('<h2>%s</h2>%s' % (html.escape(title), content))
+    if check:
+        body.append('<h2>Recorded topics</h2>' + topic_table_html(check.get('results', [])))
+    index = os.path.join(out_dir, 'index.html')
+    with open(index, 'w') as stream:
+        stream.write('<!DOCTYPE html><html><head><meta charset="utf-8"><title>SARAS demo report</title>'
+                     '<style>%s</style></head><body>%s</body></html>' % (CSS, '\n'.join(body)))
+    return index
