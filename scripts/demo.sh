@@ -66,6 +66,7 @@ fi
 python3 -c "from PIL import ImageGrab; ImageGrab.grab(xdisplay='$DISPLAY').save('$REPORT/rviz.png')" \
   || echo "demo: rviz screenshot failed"
 rosparam dump "$OUT/params.yaml" 2>/dev/null || true
+python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
 sleep $(( DURATION - capture_at ))
 
 echo "demo: stopping the platform"

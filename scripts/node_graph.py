@@ -1,0 +1,58 @@
+#!/usr/bin/env python3
+"""Write the platform's node/topic graph (Mermaid) from a RUNNING ROS master.
+
+  scripts/node_graph.py OUT.md      (ROS_MASTER_URI must point at the running platform)
+The demo runs it, and docs/node_graph.md in the repository is such a capture; tests/test_workspace.py
+checks that every node platform.launch starts appears in it, so the README diagram stays in sync.
+"""
+import re
+import sys
+
+import rosgraph.masterapi
+
+IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock')
+IGNORED_NODES = ('/rosout', '/snapshot_image', '/rostopic', '/rosnode')
+
+
+def ident(name):
+    return 'n_' + re.sub(r'[^A-Za-z0-9_]', '_', name.strip('/'))
+
+
+def main(out_path):
+    master = rosgraph.masterapi.Master('/node_graph')
+    pubs, subs, _ = master.getSystemState()
+    edges = {}
+    sub_map = {t: [n for n in ns if not n.startswith(IGNORED_NODES)] for t, ns in subs}
+    nodes = set()
+    for topic, publishers in pubs:
+        if topic in IGNORED_TOPICS:
+            continue
+        for p in publishers:
+            if p.startswith(IGNORED_NODES):
+                continue
+            nodes.add(p)
+            for s in sub_map.get(topic, []):
+                if s != p:
+                    nodes.add(s)
+                    edges.setdefault((p, s), []).append(topic)
+    for topic, ns in sub_map.items():
+        nodes.update(ns)
+    lines = ['# Platform node graph', '',
+             'Captured from the running simulated platform (`make demo`, scripts/node_graph.py).',
+             'Edges are topics (`/tf`, `/tf_static` included); /rosout omitted.', '',
+             '```mermaid', 'flowchart LR']
+    for n in sorted(nodes):
+        lines.append('  %s["%s"]' % (ident(n), n))
+    for (p, s), topics in sorted(edges.items()):
+        label = '<br/>'.join(sorted(topics)[:4]) + ('<br/>+%d more' % (len(topics) - 4) if len(topics) > 4 else '')
+        lines.append('  %s -->|"%s"| %s' % (ident(p), label, ident(s)))
+    lines.append('```')
+    lines.append('')
+    lines.append('Nodes: %d, publisher→subscriber pairs: %d.' % (len(nodes), len(edges)))
+    with open(out_path, 'w') as f:
+        f.write('\n'.join(lines) + '\n')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main(sys.argv[1]))

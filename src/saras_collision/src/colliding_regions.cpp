@@ -1,0 +1,457 @@
+#include "saras_collision/colliding_regions.h"
+
+#include <cmath>
+#include <limits>
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "saras_collision/vertices_file.h"
+
+namespace saras_collision
+{
+namespace
+{
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool positiveFinite(double v)
+{
+  return std::isfinite(v) && v > 0.0;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& v)
+{
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+std_msgs::ColorRGBA color(float r, float g, float b, float a)
+{
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+std_msgs::ColorRGBA zoneColor(Zone zone)
+{
+  switch (zone)
+  {
+    case Zone::kCollision:
+      return color(1.0f, 0.0f, 0.0f, 0.9f);
+    case Zone::kWarning:
+      return color(1.0f, 0.65f, 0.0f, 0.9f);
+    case Zone::kSafe:
+      return color(0.0f, 0.8f, 0.0f, 0.9f);
+    default:
+      return color(0.5f, 0.5f, 0.5f, 0.6f);
+  }
+}
+
+/// Quaternion of a box frame (columns may be left-handed: then z is flipped, the cube is symmetric).
+Eigen::Quaterniond boxOrientation(const Eigen::Matrix3d& axes)
+{
+  Eigen::Matrix3d m = axes;
+  if (m.determinant() < 0.0)
+    m.col(2) = -m.col(2);
+  return Eigen::Quaterniond(m).normalized();
+}
+}  // namespace
+
+bool loadConfig(const ros::NodeHandle& pnh, CollidingRegionsConfig& c, std::string& error)
+{
+  auto bad = [&](const std::string& name, const std::string& why) {
+    error = "parameter ~" + name + " " + why;
+    return false;
+  };
+  pnh.param("rate", c.rate, c.rate);
+  if (!positiveFinite(c.rate) || c.rate > 10000.0)
+    return bad("rate", "must be in (0, 10000] Hz");
+  if (!pnh.getParam("vertices_file", c.vertices_file) || c.vertices_file.empty())
+    return bad("vertices_file", "is required (path of the forbidden-region vertices file)");
+  pnh.param("scaling", c.scaling, c.scaling);
+  if (!positiveFinite(c.scaling))
+    return bad("scaling", "must be a finite number > 0 (file unit -> metres)");
+  pnh.param("vertex_tolerance", c.vertex_tolerance, c.vertex_tolerance);
+  if (!std::isfinite(c.vertex_tolerance) || c.vertex_tolerance < 0.0 || c.vertex_tolerance > 0.1)
+    return bad("vertex_tolerance", "must be in [0, 0.1] (relative)");
+  pnh.param("thresholds/collision", c.collision_threshold, c.collision_threshold);
+  pnh.param("thresholds/warning", c.warning_threshold, c.warning_threshold);
+  if (!std::isfinite(c.collision_threshold) || c.collision_threshold < 0.0)
+    return bad("thresholds/collision", "must be a finite distance >= 0 m");
+  if (!std::isfinite(c.warning_threshold) || c.warning_threshold <= c.collision_threshold)
+    return bad("thresholds/warning", "must be a finite distance > thresholds/collision (m)");
+  pnh.param("tf_timeout", c.tf_timeout, c.tf_timeout);
+  if (!positiveFinite(c.tf_timeout))
+    return bad("tf_timeout", "must be > 0 s");
+  pnh.param("pose_timeout", c.pose_timeout, c.pose_timeout);
+  if (!positiveFinite(c.pose_timeout))
+    return bad("pose_timeout", "must be > 0 s");
+  pnh.param("marker_rate", c.marker_rate, c.marker_rate);
+  if (!std::isfinite(c.marker_rate) || c.marker_rate < 0.0)
+    return bad("marker_rate", "must be >= 0 Hz (0 disables the markers)");
+  pnh.param("status_rate", c.status_rate, c.status_rate);
+  if (!positiveFinite(c.status_rate))
+    return bad("status_rate", "must be > 0 Hz");
+  pnh.param<std::string>("world_frame", c.world_frame, c.world_frame);
+  pnh.param<std::string>("bones_frame", c.bones_frame, c.bones_frame);
+  if (c.world_frame.empty())
+    return bad("world_frame", "must not be empty");
+  if (c.bones_frame.empty())
+    return bad("bones_frame", "must not be empty");
+  pnh.param("fixture/enabled", c.fixture_enabled, c.fixture_enabled);
+  pnh.param("fixture/stiffness", c.fixture_stiffness, c.fixture_stiffness);
+  pnh.param("fixture/max_force", c.fixture_max_force, c.fixture_max_force);
+  if (!std::isfinite(c.fixture_stiffness) || c.fixture_stiffness < 0.0)
+    return bad("fixture/stiffness", "must be >= 0 N/m");
+  if (!std::isfinite(c.fixture_max_force) || c.fixture_max_force < 0.0)
+    return bad("fixture/max_force", "must be >= 0 N");
+
+  std::vector<std::string> names;
+  if (!pnh.getParam("tools", names) || names.empty())
+    return bad("tools", "must be a non-empty list of tool names (order of /collision/distances)");
+  c.tools.clear();
+  for (const std::string& name : names)
+  {
+    CollidingRegionsConfig::Tool t;
+    t.name = name;
+    const std::string p = "tool/" + name + "/";
+    if (!pnh.getParam(p + "topic", t.topic) || t.topic.empty())
+      return bad(p + "topic", "is required (tool-tip PoseStamped topic)");
+    if (!pnh.getParam(p + "frame", t.frame) || t.frame.empty())
+      return bad(p + "frame", "is required (frame of the tool-tip pose)");
+    if (!pnh.getParam(p + "trocar_frame", t.trocar_frame) || t.trocar_frame.empty())
+      return bad(p + "trocar_frame", "is required (TF frame at the trocar / RCM)");
+    if (!pnh.getParam(p + "radius", t.radius) || !std::isfinite(t.radius) || t.radius < 0.0 || t.radius > 0.05)
+      return bad(p + "radius", "is required, in [0, 0.05] m (instrument shaft radius)");
+    pnh.param<std::string>(p + "fixture_topic", t.fixture_topic, "");
+    c.tools.push_back(t);
+  }
+  return true;
+}
+
+CollidingRegions::CollidingRegions(const ros::NodeHandle& nh, const CollidingRegionsConfig& config)
+  : nh_(nh)
+  , config_(config)
+  , scene_([&config] {
+    std::vector<ToolSpec> specs;
+    for (const auto& t : config.tools)
+      specs.push_back(ToolSpec{ t.name, t.radius });
+    return specs;
+  }())
+  , tools_(config.tools.size())
+{
+}
+
+bool CollidingRegions::start(std::string& error)
+{
+  if (!loadVerticesFile(config_.vertices_file, config_.scaling, config_.vertex_tolerance, boxes_bones_, error))
+    return false;
+  boxes_world_ = boxes_bones_;
+  for (std::size_t i = 0; i < boxes_bones_.size(); ++i)
+    box_names_.push_back("bone_" + std::to_string(i));
+  ROS_INFO("colliding_regions: %zu forbidden-region boxes from %s (scaling %g), %zu tools, %.1f Hz",
+           boxes_bones_.size(), config_.vertices_file.c_str(), config_.scaling, tools_.size(), config_.rate);
+
+  tf_listener_.reset(new tf2_ros::TransformListener(tf_buffer_, nh_));
+  const std::size_t n = tools_.size();
+  distances_msg_.data.assign(n, kNaN);
+  distances_msg_.layout.dim.resize(1);
+  distances_msg_.layout.dim[0].label = "tool";
+  distances_msg_.layout.dim[0].size = static_cast<uint32_t>(n);
+  distances_msg_.layout.dim[0].stride = static_cast<uint32_t>(n);
+  report_msg_.header.frame_id = config_.world_frame;
+  report_msg_.tools.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    report_msg_.tools[i].tool = config_.tools[i].name;
+
+  distances_pub_ = nh_.advertise<std_msgs::Float64MultiArray>("/collision/distances", 10);
+  report_pub_ = nh_.advertise<saras_msgs::CollisionReport>("/collision/report", 10);
+  markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("/collision/markers", 2);
+  status_pub_ = nh_.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    tools_[i].frame = config_.tools[i].frame;
+    tools_[i].sub = nh_.subscribe<geometry_msgs::PoseStamped>(
+        config_.tools[i].topic, 10, boost::bind(&CollidingRegions::poseCallback, this, i, _1), ros::VoidConstPtr(),
+        ros::TransportHints().tcpNoDelay());
+    if (config_.fixture_enabled && !config_.tools[i].fixture_topic.empty())
+    {
+      tools_[i].fixture_pub = nh_.advertise<geometry_msgs::WrenchStamped>(config_.tools[i].fixture_topic, 10);
+      tools_[i].wrench.header.frame_id = config_.tools[i].frame;
+    }
+  }
+  start_time_ = ros::WallTime::now();
+  cycle_timer_ = nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.rate), &CollidingRegions::cycle, this);
+  status_timer_ =
+      nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.status_rate), &CollidingRegions::statusTimer, this);
+  return true;
+}
+
+void CollidingRegions::poseCallback(std::size_t i, const geometry_msgs::PoseStampedConstPtr& msg)
+{
+  const geometry_msgs::Point& p = msg->pose.position;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+  {
+    ++rejected_;
+    ROS_ERROR_THROTTLE(1.0, "colliding_regions: rejected non-finite tool-tip pose of %s (%lu rejected so far); "
+                            "holding the last valid pose until ~pose_timeout",
+                       config_.tools[i].name.c_str(), static_cast<unsigned long>(rejected_));
+    return;
+  }
+  ToolState& t = tools_[i];
+  t.tip_local = Eigen::Vector3d(p.x, p.y, p.z);
+  if (!msg->header.frame_id.empty() && msg->header.frame_id != t.frame)
+    t.frame = msg->header.frame_id;
+  t.stamp_rx = ros::Time::now();
+  t.have_pose = true;
+  ++received_;
+}
+
+bool CollidingRegions::lookup(const std::string& frame, Eigen::Isometry3d& world_T_frame)
+{
+  try
+  {
+    const geometry_msgs::TransformStamped tf = tf_buffer_.lookupTransform(config_.world_frame, frame, ros::Time(0));
+    world_T_frame = tf2::transformToEigen(tf);
+    if (!world_T_frame.matrix().allFinite())
+      throw tf2::TransformException("non-finite transform");
+    return true;
+  }
+  catch (const tf2::TransformException& e)
+  {
+    ++tf_failures_;
+    missing_frame_ = frame;
+    if ((ros::WallTime::now() - start_time_).toSec() > config_.tf_timeout)
+      ROS_ERROR_THROTTLE(2.0, "colliding_regions: no TF %s -> %s (%s); the affected objects are left out",
+                         config_.world_frame.c_str(), frame.c_str(), e.what());
+    else
+      ROS_INFO_THROTTLE(1.0, "colliding_regions: waiting for TF %s -> %s", config_.world_frame.c_str(), frame.c_str());
+    return false;
+  }
+}
+
+void CollidingRegions::updateBones()
+{
+  Eigen::Isometry3d world_T_bones;
+  if (!lookup(config_.bones_frame, world_T_bones))
+  {
+    if (have_bones_)
+      return;  // keep the last known placement (the marker frame is static)
+    scene_.setBoxes(std::vector<OrientedBox>());
+    return;
+  }
+  if (have_bones_ && world_T_bones.matrix().isApprox(world_T_bones_.matrix(), 1e-12))
+    return;
+  world_T_bones_ = world_T_bones;
+  have_bones_ = true;
+  for (std::size_t b = 0; b < boxes_bones_.size(); ++b)
+  {
+    boxes_world_[b].center = world_T_bones * boxes_bones_[b].center;
+    boxes_world_[b].axes = world_T_bones.linear() * boxes_bones_[b].axes;
+  }
+  scene_.setBoxes(boxes_world_);
+  ROS_INFO("colliding_regions: forbidden regions placed by TF %s -> %s", config_.world_frame.c_str(),
+           config_.bones_frame.c_str());
+}
+
+void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
+{
+  const ros::Time now = ros::Time::now();
+  ++cycles_;
+  updateBones();
+  const std::size_t n = tools_.size();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    ToolState& t = tools_[i];
+    Eigen::Isometry3d world_T_base, world_T_trocar;
+    if (!t.have_pose || (now - t.stamp_rx).toSec() > config_.pose_timeout || !lookup(t.frame, world_T_base) ||
+        !lookup(config_.tools[i].trocar_frame, world_T_trocar))
+    {
+      scene_.invalidateTool(i);
+      continue;
+    }
+    scene_.setToolAxis(i, world_T_base * t.tip_local, world_T_trocar.translation());
+  }
+  const std::vector<ToolProximityResult>& results = scene_.compute();
+
+  report_msg_.header.stamp = now;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const ToolProximityResult& r = results[i];
+    distances_msg_.data[i] = r.distance;
+    saras_msgs::ToolProximity& tp = report_msg_.tools[i];
+    tp.distance = r.distance;
+    tp.result = r.code;
+    if (r.nearest.kind == NearestObject::kTool)
+      tp.nearest_object = config_.tools[r.nearest.index].name;
+    else if (r.nearest.kind == NearestObject::kBox)
+      tp.nearest_object = box_names_[r.nearest.index];
+    else
+      tp.nearest_object.clear();
+    tp.point_on_tool = toPoint(r.point_on_tool);
+    tp.point_on_object = toPoint(r.point_on_object);
+
+    ToolState& t = tools_[i];
+    if (t.fixture_pub)
+    {
+      Eigen::Vector3d force = Eigen::Vector3d::Zero();
+      Eigen::Isometry3d world_T_base;
+      if (scene_.toolValid(i) && lookup(config_.tools[i].frame, world_T_base))
+        force = world_T_base.linear().transpose() *
+                fixtureForce(r, config_.warning_threshold, config_.fixture_stiffness, config_.fixture_max_force);
+      t.wrench.header.stamp = now;
+      t.wrench.wrench.force.x = force.x();
+      t.wrench.wrench.force.y = force.y();
+      t.wrench.wrench.force.z = force.z();
+      t.fixture_pub.publish(t.wrench);
+    }
+  }
+  distances_pub_.publish(distances_msg_);
+  report_pub_.publish(report_msg_);
+
+  const ros::WallTime wall = ros::WallTime::now();
+  if (config_.marker_rate > 0.0 && (wall - last_marker_time_).toSec() >= 1.0 / config_.marker_rate)
+  {
+    last_marker_time_ = wall;
+    publishMarkers(now);
+  }
+  std::string message;
+  if (computeLevel(message) != last_level_)
+    publishStatus(now);
+}
+
+void CollidingRegions::publishMarkers(const ros::Time& now)
+{
+  if (markers_pub_.getNumSubscribers() == 0)
+    return;
+  const std::vector<OrientedBox>& boxes = scene_.boxes();
+  const std::size_t n = tools_.size();
+  std::vector<visualization_msgs::Marker>& m = markers_msg_.markers;
+  m.resize(boxes.size() + 2 * n + 1);
+  std::size_t k = 0;
+  for (std::size_t b = 0; b < boxes.size(); ++b, ++k)
+  {
+    visualization_msgs::Marker& mk = m[k];
+    mk.header.frame_id = config_.world_frame;
+    mk.header.stamp = now;
+    mk.ns = "bones";
+    mk.id = static_cast<int>(b);
+    mk.type = visualization_msgs::Marker::CUBE;
+    mk.action = visualization_msgs::Marker::ADD;
+    mk.pose.position = toPoint(boxes[b].center);
+    const Eigen::Quaterniond q = boxOrientation(boxes[b].axes);
+    mk.pose.orientation.w = q.w();
+    mk.pose.orientation.x = q.x();
+    mk.pose.orientation.y = q.y();
+    mk.pose.orientation.z = q.z();
+    mk.scale.x = 2 * boxes[b].half.x();
+    mk.scale.y = 2 * boxes[b].half.y();
+    mk.scale.z = 2 * boxes[b].half.z();
+    mk.color = color(0.93f, 0.9f, 0.8f, 0.6f);
+  }
+  const std::vector<ToolProximityResult>& results = scene_.results();
+  visualization_msgs::Marker& lines = m[k + 2 * n];
+  lines.header.frame_id = config_.world_frame;
+  lines.header.stamp = now;
+  lines.ns = "closest_points";
+  lines.id = 0;
+  lines.type = visualization_msgs::Marker::LINE_LIST;
+  lines.action = visualization_msgs::Marker::ADD;
+  lines.pose.orientation.w = 1.0;
+  lines.scale.x = 0.001;
+  lines.color = color(1.0f, 0.0f, 1.0f, 1.0f);
+  lines.points.clear();
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const Zone zone = classifyDistance(results[i].distance, config_.collision_threshold, config_.warning_threshold);
+    const double r = config_.tools[i].radius;
+    const bool valid = scene_.toolValid(i);
+    const Eigen::Vector3d tip = scene_.toolTip(i), trocar = scene_.toolTrocar(i);
+    // Shaft: cylinder between tip and trocar; ends: sphere list.
+    visualization_msgs::Marker& shaft = m[k + 2 * i];
+    visualization_msgs::Marker& ends = m[k + 2 * i + 1];
+    shaft.header.frame_id = ends.header.frame_id = config_.world_frame;
+    shaft.header.stamp = ends.header.stamp = now;
+    shaft.ns = "tool_shafts";
+    ends.ns = "tool_ends";
+    shaft.id = ends.id = static_cast<int>(i);
+    shaft.type = visualization_msgs::Marker::CYLINDER;
+    ends.type = visualization_msgs::Marker::SPHERE_LIST;
+    shaft.action = ends.action = valid ? visualization_msgs::Marker::ADD : visualization_msgs::Marker::DELETE;
+    shaft.color = ends.color = zoneColor(zone);
+    const double length = (trocar - tip).norm();
+    shaft.pose.position = toPoint(0.5 * (tip + trocar));
+    const Eigen::Quaterniond q = length > 0.0 ?
+                                     Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), trocar - tip) :
+                                     Eigen::Quaterniond::Identity();
+    shaft.pose.orientation.w = q.w();
+    shaft.pose.orientation.x = q.x();
+    shaft.pose.orientation.y = q.y();
+    shaft.pose.orientation.z = q.z();
+    shaft.scale.x = shaft.scale.y = std::max(2 * r, 1e-4);
+    shaft.scale.z = std::max(length, 1e-4);
+    ends.pose.orientation.w = 1.0;
+    ends.scale.x = ends.scale.y = ends.scale.z = std::max(2 * r, 1e-4);
+    ends.points.resize(2);
+    ends.points[0] = toPoint(tip);
+    ends.points[1] = toPoint(trocar);
+    if (valid && results[i].nearest.kind != NearestObject::kNone)
+    {
+      lines.points.push_back(toPoint(results[i].point_on_tool));
+      lines.points.push_back(toPoint(results[i].point_on_object));
+    }
+  }
+  if (lines.points.empty())
+    lines.action = visualization_msgs::Marker::DELETE;
+  markers_pub_.publish(markers_msg_);
+}
+
+uint8_t CollidingRegions::computeLevel(std::string& message) const
+{
+  if (!have_bones_)
+  {
+    message = "no TF " + config_.world_frame + " -> " + config_.bones_frame + ": bones left out";
+    return saras_msgs::ComponentStatus::WARN;
+  }
+  std::string missing;
+  for (std::size_t i = 0; i < tools_.size(); ++i)
+    if (!scene_.toolValid(i))
+      missing += (missing.empty() ? "" : ", ") + config_.tools[i].name;
+  if (!missing.empty())
+  {
+    message = "no valid pose/TF for: " + missing;
+    return saras_msgs::ComponentStatus::WARN;
+  }
+  message = "ok";
+  return saras_msgs::ComponentStatus::OK;
+}
+
+void CollidingRegions::publishStatus(const ros::Time& now)
+{
+  saras_msgs::ComponentStatus s;
+  s.header.stamp = now;
+  s.component = "colliding_regions";
+  s.level = computeLevel(s.message);
+  last_level_ = s.level;
+  double age = 0.0;
+  for (const ToolState& t : tools_)
+    age = std::max(age, t.have_pose ? (now - t.stamp_rx).toSec() : (ros::WallTime::now() - start_time_).toSec());
+  s.input_age = age;
+  s.received = received_;
+  s.rejected = rejected_;
+  if (tf_failures_ > 0 && s.level != saras_msgs::ComponentStatus::OK)
+    s.message += " (last missing TF frame: " + missing_frame_ + ")";
+  status_pub_.publish(s);
+}
+
+void CollidingRegions::statusTimer(const ros::SteadyTimerEvent&)
+{
+  publishStatus(ros::Time::now());
+}
+
+}  // namespace saras_collision

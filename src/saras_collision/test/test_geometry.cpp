@@ -1,0 +1,725 @@
+// Geometry core tests: closed-form cases, FCL regression cases and >= 10000 random
+// configurations per kind compared with FCL (libfcl-dev 0.7) and with independent exact
+// references written differently from the library (candidate enumeration instead of the
+// clamped normal equations / the piecewise-quadratic walk).
+#include "saras_collision/geometry.h"
+
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+using Eigen::Vector3d;
+using saras_collision::OrientedBox;
+
+namespace
+{
+constexpr int kRandomCases = 10000;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// ---------------------------------------------------------------- independent references
+double pointSegment(const Vector3d& p, const Vector3d& a, const Vector3d& b)
+{
+  const Vector3d d = b - a;
+  const double dd = d.squaredNorm();
+  const double t = dd == 0.0 ? 0.0 : std::min(1.0, std::max(0.0, (p - a).dot(d) / dd));
+  return (a + t * d - p).norm();
+}
+
+/// Segment-segment distance by enumerating the KKT candidates: the four end-point-to-segment
+/// distances and, if it lies inside both segments, the unconstrained critical pair.
+double segmentSegmentRef(const Vector3d& p1, const Vector3d& p2, const Vector3d& p3, const Vector3d& p4)
+{
+  double best = std::min(std::min(pointSegment(p1, p3, p4), pointSegment(p2, p3, p4)),
+                         std::min(pointSegment(p3, p1, p2), pointSegment(p4, p1, p2)));
+  const Vector3d u = p2 - p1, v = p4 - p3, w = p1 - p3;
+  Eigen::Matrix2d A;
+  A << u.dot(u), -u.dot(v), -u.dot(v), v.dot(v);
+  const Eigen::Vector2d rhs(-u.dot(w), v.dot(w));
+  if (std::abs(A.determinant()) > 1e-14 * A(0, 0) * A(1, 1))
+  {
+    const Eigen::Vector2d st = A.fullPivLu().solve(rhs);
+    if (st[0] >= 0 && st[0] <= 1 && st[1] >= 0 && st[1] <= 1)
+      best = std::min(best, (p1 + st[0] * u - p3 - st[1] * v).norm());
+  }
+  return best;
+}
+
+/// Exact signed distance of a point to a box (negative inside).
+double pointBoxSigned(const Vector3d& p, const OrientedBox& box)
+{
+  const Vector3d x = box.axes.transpose() * (p - box.center);
+  Vector3d outside;
+  double inside = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i)
+  {
+    outside[i] = std::max(std::abs(x[i]) - box.half[i], 0.0);
+    inside = std::max(inside, std::abs(x[i]) - box.half[i]);
+  }
+  return outside.squaredNorm() > 0.0 ? outside.norm() : inside;
+}
+
+/// Liang-Barsky clipping: does the segment meet the closed box?
+bool segmentMeetsBox(const Vector3d& p1, const Vector3d& p2, const OrientedBox& box)
+{
+  const Vector3d a = box.axes.transpose() * (p1 - box.center);
+  const Vector3d d = box.axes.transpose() * (p2 - p1);
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < 3; ++i)
+  {
+    if (d[i] == 0.0)
+    {
+      if (std::abs(a[i]) > box.half[i])
+        return false;
+      continue;
+    }
+    double ta = (-box.half[i] - a[i]) / d[i], tb = (box.half[i] - a[i]) / d[i];
+    if (ta > tb)
+      std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1)
+      return false;
+  }
+  return true;
+}
+
+/// Axis-to-box distance by the deliverable's decomposition (end-points as spheres + the 12
+/// edges as zero-radius capsules), valid when the axis does not meet the box.
+double segmentBoxRef(const Vector3d& p1, const Vector3d& p2, const OrientedBox& box)
+{
+  if (segmentMeetsBox(p1, p2, box))
+    return 0.0;
+  Vector3d v[8];
+  saras_collision::boxVertices(box, v);
+  const int edges[12][2] = { { 0, 1 }, { 1, 2 }, { 2, 3 }, { 3, 0 }, { 4, 5 }, { 5, 6 },
+                             { 6, 7 }, { 7, 4 }, { 0, 4 }, { 1, 5 }, { 2, 6 }, { 3, 7 } };
+  double best = std::min(pointBoxSigned(p1, box), pointBoxSigned(p2, box));
+  for (const auto& e : edges)
+    best = std::min(best, segmentSegmentRef(p1, p2, v[e[0]], v[e[1]]));
+  return best;
+}
+
+/// Minimum of the box signed distance along the axis by dense sampling (upper bound of the
+/// exact minimum, within |p2 - p1| / (2 n) of it since the signed distance is 1-Lipschitz).
+double sampledAxisDepth(const Vector3d& p1, const Vector3d& p2, const OrientedBox& box, int n)
+{
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k <= n; ++k)
+    best = std::min(best, pointBoxSigned(p1 + (p2 - p1) * (static_cast<double>(k) / n), box));
+  return best;
+}
+
+// ---------------------------------------------------------------- FCL adapters
+fcl::Transform3d capsuleTransform(const Vector3d& p1, const Vector3d& p2)
+{
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  tf.translation() = 0.5 * (p1 + p2);
+  tf.linear() = Eigen::Quaterniond::FromTwoVectors(Vector3d::UnitZ(), p2 - p1).toRotationMatrix();
+  return tf;
+}
+
+fcl::Transform3d boxTransform(const OrientedBox& box)
+{
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  tf.translation() = box.center;
+  tf.linear() = box.axes;
+  return tf;
+}
+
+struct FclAnswer
+{
+  double distance;
+  bool collides;
+};
+
+FclAnswer fclQuery(const fcl::CollisionGeometryd& g1, const fcl::Transform3d& tf1, const fcl::CollisionGeometryd& g2,
+                   const fcl::Transform3d& tf2)
+{
+  fcl::DistanceRequestd request;
+  request.enable_nearest_points = false;
+  request.distance_tolerance = 1e-12;  // the default 1e-6 leaves GJK up to ~0.5 mm off
+  request.gjk_solver_type = fcl::GST_LIBCCD;
+  fcl::DistanceResultd result;
+  fcl::distance(&g1, tf1, &g2, tf2, request, result);
+  fcl::CollisionRequestd creq;
+  fcl::CollisionResultd cres;
+  fcl::collide(&g1, tf1, &g2, tf2, creq, cres);
+  return { result.min_distance, cres.isCollision() };
+}
+
+// ---------------------------------------------------------------- random generators
+struct Random
+{
+  std::mt19937_64 gen{ 20260521 };
+  double uniform(double lo, double hi)
+  {
+    return std::uniform_real_distribution<double>(lo, hi)(gen);
+  }
+  Vector3d point(double extent)
+  {
+    return Vector3d(uniform(-extent, extent), uniform(-extent, extent), uniform(-extent, extent));
+  }
+  Eigen::Matrix3d rotation()
+  {
+    Eigen::Quaterniond q(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+    if (q.norm() < 1e-3)
+      q = Eigen::Quaterniond::Identity();
+    return q.normalized().toRotationMatrix();
+  }
+  OrientedBox box()
+  {
+    OrientedBox b;
+    b.center = point(0.02);
+    b.axes = rotation();
+    b.half = Vector3d(uniform(0.003, 0.04), uniform(0.003, 0.04), uniform(0.003, 0.04));
+    b.bounding_radius = b.half.norm();
+    return b;
+  }
+  /// Segment of length in [1 mm, 120 mm] around the scene.
+  void segment(Vector3d& p1, Vector3d& p2, double extent = 0.08)
+  {
+    p1 = point(extent);
+    Vector3d dir = point(1.0);
+    while (dir.norm() < 1e-3)
+      dir = point(1.0);
+    p2 = p1 + dir.normalized() * uniform(0.001, 0.12);
+  }
+};
+
+OrientedBox boxFromVertices(const Vector3d v[8])
+{
+  OrientedBox box;
+  EXPECT_EQ(saras_collision::makeBox(v, 1e-9, box), saras_collision::kSeparated);
+  return box;
+}
+
+/// Axis-aligned box [lo, hi] as 8 vertices in the documented order.
+void aabbVertices(const Vector3d& lo, const Vector3d& hi, Vector3d v[8])
+{
+  const Vector3d x(hi.x() - lo.x(), 0, 0), y(0, hi.y() - lo.y(), 0), z(0, 0, hi.z() - lo.z());
+  v[0] = lo;
+  v[1] = lo + x;
+  v[2] = lo + x + z;
+  v[3] = lo + z;
+  v[4] = lo + y;
+  v[5] = lo + x + y;
+  v[6] = lo + x + y + z;
+  v[7] = lo + y + z;
+}
+}  // namespace
+
+// ===================================================================== capsule-capsule
+TEST(CapsuleCapsule, CrossingAxesSeparatedTangentIntersecting)
+{
+  double d;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0, -1, 1),
+                                                     Vector3d(0, 1, 1), 0.25, 0.25, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 0.5, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(0, 0, 0.25), 1e-15)) << a.transpose();
+  EXPECT_TRUE(b.isApprox(Vector3d(0, 0, 0.75), 1e-15)) << b.transpose();
+
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0, -1, 0.5),
+                                                     Vector3d(0, 1, 0.5), 0.25, 0.25, d, a, b),
+            saras_collision::kTangent);
+  EXPECT_NEAR(d, 0.0, 1e-15);
+  EXPECT_NEAR((a - Vector3d(0, 0, 0.25)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((b - a).norm(), 0.0, 1e-15);
+
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0, -1, 0.3),
+                                                     Vector3d(0, 1, 0.3), 0.25, 0.25, d, a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.2, 1e-15);
+  // Witnesses: closest points of the axes.
+  EXPECT_TRUE(a.isApprox(Vector3d(0, 0, 0), 1e-15));
+  EXPECT_TRUE(b.isApprox(Vector3d(0, 0, 0.3), 1e-15));
+}
+
+TEST(CapsuleCapsule, ParallelOverlappingGivesValidPoints)
+{
+  double d;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0.5, 1, 0),
+                                                     Vector3d(2, 1, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kParallel);
+  EXPECT_NEAR(d, 0.8, 1e-15);
+  EXPECT_NEAR((a - b).norm(), 0.8, 1e-15);
+  EXPECT_NEAR(a.y(), 0.1, 1e-15);
+  EXPECT_NEAR(b.y(), 0.9, 1e-15);
+  EXPECT_NEAR(a.x(), b.x(), 1e-15);
+  EXPECT_GE(a.x(), 0.5);
+  EXPECT_LE(a.x(), 1.0);
+  // Anti-parallel direction gives the same.
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(2, 1, 0),
+                                                     Vector3d(0.5, 1, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kParallel);
+  EXPECT_NEAR(d, 0.8, 1e-15);
+  EXPECT_NEAR((a - b).norm(), 0.8, 1e-15);
+}
+
+TEST(CapsuleCapsule, ParallelDisjointAndCollinear)
+{
+  double d;
+  Vector3d a, b;
+  // Parallel, no overlap of the projections: closest pair = facing end-points.
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(2, 1, 0),
+                                                     Vector3d(3, 1, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kParallel);
+  EXPECT_NEAR(d, std::sqrt(2.0) - 0.2, 1e-15);
+  const Vector3d n = Vector3d(1, 1, 0).normalized();
+  EXPECT_TRUE(a.isApprox(Vector3d(1, 0, 0) + 0.1 * n, 1e-14)) << a.transpose();
+  EXPECT_TRUE(b.isApprox(Vector3d(2, 1, 0) - 0.1 * n, 1e-14)) << b.transpose();
+  // Collinear.
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(3, 0, 0),
+                                                     Vector3d(2, 0, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kParallel);
+  EXPECT_NEAR(d, 0.8, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(1.1, 0, 0), 1e-15));
+  EXPECT_TRUE(b.isApprox(Vector3d(1.9, 0, 0), 1e-15));
+  // Collinear and overlapping: intersecting.
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0.5, 0, 0),
+                                                     Vector3d(2, 0, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.2, 1e-15);
+}
+
+TEST(CapsuleCapsule, ZeroLengthCapsuleIsASphere)
+{
+  double d;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0.3, 0, 2), Vector3d(0.3, 0, 2), Vector3d(-1, 0, 0),
+                                                     Vector3d(1, 0, 0), 0.5, 0.5, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 1.0, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(0.3, 0, 1.5), 1e-15));
+  EXPECT_TRUE(b.isApprox(Vector3d(0.3, 0, 0.5), 1e-15));
+  // Sphere-sphere.
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(0, 0, 0), Vector3d(3, 4, 0),
+                                                     Vector3d(3, 4, 0), 1.0, 1.5, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 2.5, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(0.6, 0.8, 0), 1e-15));
+  EXPECT_TRUE(b.isApprox(Vector3d(2.1, 2.8, 0), 1e-15));
+}
+
+TEST(CapsuleCapsule, InvalidInputIsAnErrorCodeNotANumber)
+{
+  double d = 0.0;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(kNaN, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                                     Vector3d(1, 1, 0), 0.1, 0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_TRUE(std::isnan(d));
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                                     Vector3d(1, 1, 0), -0.1, 0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0, 1, 0),
+                                                     Vector3d(1, std::numeric_limits<double>::infinity(), 0), 0.1,
+                                                     0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_TRUE(std::isnan(a.x()));
+}
+
+TEST(CapsuleCapsule, RandomAgainstFclAndReference)
+{
+  Random rnd;
+  int separated = 0, intersecting = 0, verdict_checked = 0;
+  double worst_fcl = 0.0, worst_ref = 0.0;
+  for (int k = 0; k < kRandomCases; ++k)
+  {
+    Vector3d p1, p2, p3, p4;
+    rnd.segment(p1, p2, 0.04);
+    rnd.segment(p3, p4, 0.04);
+    if (k % 10 == 0)  // exactly parallel pairs
+      p4 = p3 + (p2 - p1) * rnd.uniform(-1.5, 1.5);
+    const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    double d;
+    Vector3d a, b;
+    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
+    const double ref = segmentSegmentRef(p1, p2, p3, p4) - r1 - r2;
+    ASSERT_TRUE(saras_collision::isValidCode(code)) << k;
+    worst_ref = std::max(worst_ref, std::abs(d - ref));
+    ASSERT_NEAR(d, ref, 1e-12) << "case " << k;
+    ASSERT_LE(d, ref + 1e-12) << "overstated, case " << k;
+    if (code == saras_collision::kSeparated || code == saras_collision::kParallel)
+    {
+      ++separated;
+      // The points realise the distance and lie on the two surfaces.
+      ASSERT_NEAR((a - b).norm(), d, 1e-12) << k;
+      ASSERT_NEAR(pointSegment(a, p1, p2), r1, 1e-12) << k;
+      ASSERT_NEAR(pointSegment(b, p3, p4), r2, 1e-12) << k;
+    }
+    else if (code == saras_collision::kIntersecting)
+    {
+      ++intersecting;
+      ASSERT_LT(d, 0.0);
+    }
+    // FCL (capsules need a non-zero length there).
+    if ((p2 - p1).norm() < 1e-3 || (p4 - p3).norm() < 1e-3)
+      continue;
+    const fcl::Capsuled c1(r1, (p2 - p1).norm()), c2(r2, (p4 - p3).norm());
+    const FclAnswer f = fclQuery(c1, capsuleTransform(p1, p2), c2, capsuleTransform(p3, p4));
+    if (std::abs(d) > 1e-6)
+    {
+      ++verdict_checked;
+      ASSERT_EQ(f.collides, code == saras_collision::kIntersecting) << "case " << k << " d=" << d;
+    }
+    if (d > 1e-6)
+    {
+      worst_fcl = std::max(worst_fcl, std::abs(d - f.distance));
+      ASSERT_NEAR(d, f.distance, 1e-6) << "case " << k;
+    }
+  }
+  std::printf("capsule-capsule: %d separated, %d intersecting, %d verdicts vs FCL; max |ours-FCL| %.3g m, "
+              "max |ours-ref| %.3g m\n",
+              separated, intersecting, verdict_checked, worst_fcl, worst_ref);
+  EXPECT_GT(separated, kRandomCases / 10);
+  EXPECT_GT(intersecting, kRandomCases / 20);
+}
+
+// ===================================================================== boxes
+TEST(Box, VertexOrderAndValidation)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 2, 3), v);
+  OrientedBox box;
+  ASSERT_EQ(saras_collision::makeBox(v, 1e-9, box), saras_collision::kSeparated);
+  EXPECT_TRUE(box.center.isApprox(Vector3d(0.5, 1, 1.5)));
+  EXPECT_TRUE(box.half.isApprox(Vector3d(0.5, 1, 1.5)));
+  Vector3d back[8];
+  saras_collision::boxVertices(box, back);
+  for (int i = 0; i < 8; ++i)
+    EXPECT_NEAR((back[i] - v[i]).norm(), 0.0, 1e-15) << i;
+
+  double d;
+  Vector3d a, b;
+  Vector3d swapped[8];
+  std::copy(v, v + 8, swapped);
+  std::swap(swapped[2], swapped[3]);  // wrong order
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, 5, 5), swapped, 0.1, d, a, b),
+            saras_collision::kInvalidBox);
+  EXPECT_TRUE(std::isnan(d));
+  Vector3d sheared[8];
+  std::copy(v, v + 8, sheared);
+  for (int i : { 4, 5, 6, 7 })
+    sheared[i].x() += 0.2;  // parallelepiped that is not rectangular
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(5, 5, 5), Vector3d(6, 6, 6), sheared, 0.1, d, a,
+                                                            b),
+            saras_collision::kInvalidBox);
+  Vector3d flat[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 2, 0), flat);
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, 5, 5), flat, 0.1, d, a, b),
+            saras_collision::kInvalidBox);
+  Vector3d with_nan[8];
+  std::copy(v, v + 8, with_nan);
+  with_nan[6].z() = kNaN;
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, 5, 5), with_nan, 0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, kNaN, 5), v, 0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, 5, 5), v, kNaN, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(5, 5, 5), nullptr, 0.1, d, a, b),
+            saras_collision::kInvalidInput);
+  // Left-handed order (y and z swapped roles) is still a rectangular box.
+  Vector3d left[8] = { v[0], v[1], v[5], v[4], v[3], v[2], v[6], v[7] };
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(0.5, 1, 4), left, 0.5, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 0.5, 1e-15);
+}
+
+TEST(SphereBox, FaceEdgeVertexInside)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 2, 3), v);
+  double d;
+  Vector3d a, b;
+  // Face region.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(0.5, 1, 4), v, 0.5, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 0.5, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(0.5, 1, 3.5)));
+  EXPECT_TRUE(b.isApprox(Vector3d(0.5, 1, 3)));
+  // Edge region.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(2, 1, 4), v, 0.0, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, std::sqrt(2.0), 1e-15);
+  EXPECT_TRUE(b.isApprox(Vector3d(1, 1, 3)));
+  EXPECT_TRUE(a.isApprox(Vector3d(2, 1, 4)));
+  // Vertex region.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(2, 3, 4), v, 0.5, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, std::sqrt(3.0) - 0.5, 1e-15);
+  EXPECT_TRUE(b.isApprox(Vector3d(1, 2, 3)));
+  EXPECT_NEAR((a - b).norm(), d, 1e-15);
+  // Tangent to a face.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(-0.25, 1, 1), v, 0.25, d, a, b),
+            saras_collision::kTangent);
+  EXPECT_TRUE(a.isApprox(Vector3d(0, 1, 1)));
+  EXPECT_TRUE(b.isApprox(Vector3d(0, 1, 1)));
+  // Overlapping from outside: negative distance, witnesses centre -> surface point.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(-0.1, 1, 1), v, 0.25, d, a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.15, 1e-15);
+  // Centre inside: depth to the nearest face (x = 0 at 0.2) plus the radius.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(0.2, 1, 1.5), v, 0.1, d, a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.3, 1e-15);
+  EXPECT_TRUE(a.isApprox(Vector3d(0.2, 1, 1.5)));
+  EXPECT_TRUE(b.isApprox(Vector3d(0, 1, 1.5)));
+  // Point (zero radius) on the surface: tangent.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(1, 1, 1), v, 0.0, d, a, b),
+            saras_collision::kTangent);
+}
+
+TEST(CapsuleBox, ClosedFormCases)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 2, 3), v);
+  double d;
+  Vector3d a, b;
+  // Axis crossing the box along x at (y, z) = (1, 1.5): deepest at the centre, depth 0.5.
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(-1, 1, 1.5), Vector3d(2, 1, 1.5), v, 0.1, d,
+                                                            a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.6, 1e-15);
+  // Parallel to the top face, above it: distance 0.3, points above each other.
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(-1, 1, 3.5), Vector3d(2, 1, 3.5), v, 0.2, d, a,
+                                                            b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 0.3, 1e-15);
+  EXPECT_NEAR(a.z(), 3.3, 1e-15);
+  EXPECT_NEAR(b.z(), 3.0, 1e-15);
+  EXPECT_NEAR(a.x(), b.x(), 1e-15);
+  EXPECT_GE(b.x(), 0.0);
+  EXPECT_LE(b.x(), 1.0);
+  // Skew over an edge: axis from (2, -1, 4) to (2, 3, 4) passes over the edge x=1, z=3.
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(2, -1, 4), Vector3d(2, 3, 4), v, 0.0, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(b.x(), 1.0, 1e-15);
+  EXPECT_NEAR(b.z(), 3.0, 1e-15);
+  // Diagonal skew over the edge x=1,z=3: closest point at y = 1 on the edge.
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(2, 0, 3), Vector3d(1, 2, 5), v, 0.0, d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, segmentSegmentRef(Vector3d(2, 0, 3), Vector3d(1, 2, 5), v[2], v[6]), 1e-15);
+  // Whole capsule inside: depth of the deepest axis point.
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(0.5, 0.5, 1.5), Vector3d(0.5, 1.5, 1.5), v, 0.1,
+                                                            d, a, b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -0.6, 1e-15);
+  // Rotating and translating everything does not change the distance.
+  const Eigen::Isometry3d T = Eigen::Translation3d(0.3, -0.2, 0.1) *
+                              Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized());
+  Vector3d w[8];
+  for (int i = 0; i < 8; ++i)
+    w[i] = T * v[i];
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(T * Vector3d(-1, 1, 3.5), T * Vector3d(2, 1, 3.5), w, 0.2,
+                                                            d, a, b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 0.3, 1e-14);
+}
+
+// FCL issue #568 (capsule vs AABB reported as not colliding): the capsule end-point (30, 82, 29)
+// lies 30 below the box face z = 59 with x, y inside it, radius 36 -> penetration 6.
+TEST(CapsuleBox, FclIssue568Regression)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(26, 63, 59), Vector3d(98, 89, 99), v);
+  double d;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(30, 82, 29), Vector3d(67, 68, 11), v, 36.0, d, a,
+                                                            b),
+            saras_collision::kIntersecting);
+  EXPECT_NEAR(d, -6.0, 1e-12);
+  EXPECT_TRUE(a.isApprox(Vector3d(30, 82, 29)));
+  EXPECT_TRUE(b.isApprox(Vector3d(30, 82, 59)));
+  // Informative: what FCL says on this machine.
+  const OrientedBox box = boxFromVertices(v);
+  const fcl::Capsuled cap(36.0, (Vector3d(67, 68, 11) - Vector3d(30, 82, 29)).norm());
+  const fcl::Boxd fbox(72, 26, 40);
+  const FclAnswer f = fclQuery(cap, capsuleTransform(Vector3d(30, 82, 29), Vector3d(67, 68, 11)), fbox,
+                               boxTransform(box));
+  std::printf("FCL #568 case: collide=%d distance=%g (exact: collision, -6)\n", f.collides, f.distance);
+}
+
+// FCL issue #508 (box-box along y reported 3.16 instead of 3 by libccd): the same geometry with a
+// capsule of radius 0.5 along x standing for the first box's y-extent.
+TEST(CapsuleBox, FclIssue508Regression)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(-0.5, 3.5, -0.5), Vector3d(0.5, 4.5, 0.5), v);
+  double d;
+  Vector3d a, b;
+  EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(-0.5, 0, 0), Vector3d(0.5, 0, 0), v, 0.5, d, a,
+                                                            b),
+            saras_collision::kSeparated);
+  EXPECT_NEAR(d, 3.0, 1e-15);
+  EXPECT_NEAR(a.y(), 0.5, 1e-15);
+  EXPECT_NEAR(b.y(), 3.5, 1e-15);
+  for (double y : { 1.0, 1.5, 1.99, 2.5, 4.0, 10.0 })
+  {
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(0, 0, 0), v, 0.5, d, a, b),
+              saras_collision::kSeparated);
+    Vector3d u[8];
+    aabbVertices(Vector3d(-0.5, y - 0.5, -0.5), Vector3d(0.5, y + 0.5, 0.5), u);
+    saras_collision::dist_sphere_to_parallelepiped(Vector3d(0, 0, 0), u, 0.5, d, a, b);
+    EXPECT_NEAR(d, y - 1.0, 1e-15) << y;
+  }
+}
+
+// FCL issue #589 (capsule robot links vs a 0.3 x 0.3 x 0.5 box at (0.6, 0, 0.25): wrong
+// collision and distance results): vertical capsules approaching the face x = 0.45.
+TEST(CapsuleBox, FclIssue589Regression)
+{
+  Vector3d v[8];
+  aabbVertices(Vector3d(0.45, -0.15, 0.0), Vector3d(0.75, 0.15, 0.5), v);
+  double d;
+  Vector3d a, b;
+  const double r = 0.05;
+  const struct
+  {
+    double x, expected;
+    int code;
+  } cases[] = { { 0.30, 0.10, saras_collision::kSeparated },
+                { 0.40, 0.0, saras_collision::kTangent },
+                { 0.42, -0.02, saras_collision::kIntersecting },
+                { 0.60, -0.20, saras_collision::kIntersecting } };
+  for (const auto& c : cases)
+  {
+    EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(c.x, 0, 0.1), Vector3d(c.x, 0, 0.7), v, r, d,
+                                                              a, b),
+              c.code)
+        << c.x;
+    EXPECT_NEAR(d, c.expected, 1e-15) << c.x;
+  }
+}
+
+namespace
+{
+void checkCapsuleBoxCase(Random& rnd, int k, bool sphere, int& separated, int& intersecting, double& worst_fcl,
+                         double& worst_ref)
+{
+  const OrientedBox box = rnd.box();
+  Vector3d p1, p2;
+  rnd.segment(p1, p2);
+  if (sphere)
+    p2 = p1;
+  const double r = rnd.uniform(0.0, 0.01);
+  Vector3d v[8];
+  saras_collision::boxVertices(box, v);
+  double d;
+  Vector3d a, b;
+  const int code = sphere ? saras_collision::dist_sphere_to_parallelepiped(p1, v, r, d, a, b) :
+                            saras_collision::dist_capsule_to_parallelepiped(p1, p2, v, r, d, a, b);
+  ASSERT_TRUE(code == saras_collision::kSeparated || code == saras_collision::kTangent ||
+              code == saras_collision::kIntersecting)
+      << k << " code " << code;
+  const double axis_ref = segmentBoxRef(p1, p2, box);
+  if (axis_ref > 0.0)
+  {
+    const double ref = axis_ref - r;
+    worst_ref = std::max(worst_ref, std::abs(d - ref));
+    ASSERT_NEAR(d, ref, 1e-12) << "case " << k;
+    ASSERT_LE(d, ref + 1e-12) << "overstated, case " << k;
+  }
+  else
+  {
+    // Axis meets the box: the signed distance is the deepest axis point's depth minus r.
+    ASSERT_EQ(code, r > 0.0 ? saras_collision::kIntersecting : code) << k;
+    const int n = 2000;
+    const double sampled = sampledAxisDepth(p1, p2, box, n) - r;
+    ASSERT_LE(d, sampled + 1e-12) << k << " code " << code << " r " << r << " p1 " << p1.transpose() << " p2 "
+                                  << p2.transpose() << " c " << box.center.transpose() << " h "
+                                  << box.half.transpose() << " a " << a.transpose() << " b " << b.transpose();
+    ASSERT_GE(d, sampled - (p2 - p1).norm() / n - 1e-12) << k;
+  }
+  if (code == saras_collision::kSeparated)
+  {
+    ++separated;
+    ASSERT_NEAR((a - b).norm(), d, 1e-12) << k;
+    ASSERT_NEAR(pointSegment(a, p1, p2), r, 1e-12) << k;
+    ASSERT_NEAR(pointBoxSigned(b, box), 0.0, 1e-12) << k;
+  }
+  else if (code == saras_collision::kIntersecting)
+  {
+    ++intersecting;
+  }
+  const fcl::Boxd fbox(2 * box.half);
+  FclAnswer f;
+  if (sphere)
+  {
+    const fcl::Sphered s(r);
+    fcl::Transform3d tf = fcl::Transform3d::Identity();
+    tf.translation() = p1;
+    f = fclQuery(s, tf, fbox, boxTransform(box));
+  }
+  else
+  {
+    if ((p2 - p1).norm() < 1e-3)
+      return;
+    const fcl::Capsuled c(r, (p2 - p1).norm());
+    f = fclQuery(c, capsuleTransform(p1, p2), fbox, boxTransform(box));
+  }
+  if (std::abs(d) > 1e-6)
+    ASSERT_EQ(f.collides, code == saras_collision::kIntersecting) << "case " << k << " d=" << d;
+  if (d > 1e-6)
+  {
+    worst_fcl = std::max(worst_fcl, std::abs(d - f.distance));
+    ASSERT_NEAR(d, f.distance, 1e-6) << "case " << k;
+  }
+}
+}  // namespace
+
+TEST(CapsuleBox, RandomAgainstFclAndReference)
+{
+  Random rnd;
+  int separated = 0, intersecting = 0;
+  double worst_fcl = 0.0, worst_ref = 0.0;
+  for (int k = 0; k < kRandomCases; ++k)
+  {
+    checkCapsuleBoxCase(rnd, k, false, separated, intersecting, worst_fcl, worst_ref);
+    if (HasFatalFailure())
+      return;
+  }
+  std::printf("capsule-box: %d separated, %d intersecting; max |ours-FCL| %.3g m, max |ours-ref| %.3g m\n",
+              separated, intersecting, worst_fcl, worst_ref);
+  EXPECT_GT(separated, kRandomCases / 10);
+  EXPECT_GT(intersecting, kRandomCases / 20);
+}
+
+TEST(SphereBox, RandomAgainstFclAndReference)
+{
+  Random rnd;
+  rnd.gen.seed(77);
+  int separated = 0, intersecting = 0;
+  double worst_fcl = 0.0, worst_ref = 0.0;
+  for (int k = 0; k < kRandomCases; ++k)
+  {
+    checkCapsuleBoxCase(rnd, k, true, separated, intersecting, worst_fcl, worst_ref);
+    if (HasFatalFailure())
+      return;
+  }
+  std::printf("sphere-box: %d separated, %d intersecting; max |ours-FCL| %.3g m, max |ours-ref| %.3g m\n", separated,
+              intersecting, worst_fcl, worst_ref);
+  EXPECT_GT(separated, kRandomCases / 10);
+  EXPECT_GT(intersecting, kRandomCases / 50);
+}
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

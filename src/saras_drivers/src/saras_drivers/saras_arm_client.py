@@ -1,0 +1,178 @@
+"""Socket.IO client of one SARAS arm (ROS-agnostic core of ``saras_arms_driver`` and
+``saras_arms_state``).
+
+* Connects over the websocket transport; retries with exponential backoff (``backoff_initial`` ..
+  ``backoff_max`` seconds, +-50 % jitter) both for the first connection and after a drop.
+* Never queues commands: while disconnected a command is refused (returns False / raises), and
+  after a reconnection nothing is replayed. On every (re)connection the client sends ``hold``
+  (if ``hold_on_connect``) so the arm stays where it is until a fresh command arrives.
+* Validates every ``state`` event with :mod:`saras_arm_protocol` before handing it on.
+"""
+
+import logging
+import random
+import threading
+import time
+
+import socketio
+
+from saras_drivers import saras_arm_protocol as proto
+
+
+class NotConnected(RuntimeError):
+    pass
+
+
+class SarasArmClient(object):
+    """:param url: e.g. ``http://127.0.0.1:5001``; callbacks are called from the client's
+    threads: ``on_state(dict)``, ``on_error(dict)``, ``on_connection(bool)``."""
+
+    def __init__(self, url, on_state=None, on_error=None, on_connection=None,
+                 subscribe_state=False, hold_on_connect=True, backoff_initial=0.2,
+                 backoff_max=5.0, logger=None):
+        if not 0.0 < backoff_initial <= backoff_max:
+            raise ValueError('need 0 < backoff_initial <= backoff_max')
+        self.url = url
+        self.on_state = on_state
+        self.on_error = on_error
+        self.on_connection = on_connection
+        self.subscribe = subscribe_state
+        self.hold_on_connect = hold_on_connect
+        self.backoff_initial = float(backoff_initial)
+        self.backoff_max = float(backoff_max)
+        self.log = logger or logging.getLogger('saras_arm_client')
+        # built-in reconnection is disabled: one supervisor thread owns (re)connection.
+        self.sio = socketio.Client(reconnection=False, logger=False, engineio_logger=False,
+                                   handle_sigint=False)
+        self.connected = False
+        self.connections = 0
+        self.states = 0
+        self.bad_states = 0
+        self.errors = 0
+        self.info = None
+        self._next_id = 0
+        self._id_lock = threading.Lock()
+        self._stop = threading.Event()
+        self._lost = threading.Event()
+        self._thread = None
+        self._register()
+
+    def next_id(self):
+        with self._id_lock:
+            self._next_id += 1
+            return self._next_id
+
+    def _register(self):
+        sio = self.sio
+
+        @sio.event
+        def connect():
+            self.connected = True
+            self.connections += 1
+
+        @sio.event
+        def disconnect():
+            self.connected = False
+            self._lost.set()
+            if self.on_connection:
+                self.on_connection(False)
+
+        @sio.on(proto.EV_STATE)
+        def state(payload):
+            try:
+                s = proto.parse_state(payload)
+            except proto.ProtocolError as e:
+                self.bad_states += 1
+                self.log.error('malformed state event: %s', e)
+                return
+            self.states += 1
+            if self.on_state:
+                self.on_state(s)
+
+        @sio.on(proto.EV_ERROR)
+        def error(payload):
+            self.errors += 1
+            if self.on_error:
+                self.on_error(payload if isinstance(payload, dict) else {'message': str(payload)})
+
+    # ------------------------------------------------------------------ connection
+    def start(self):
+        self._thread = threading.Thread(target=self._supervise, name='saras_arm_client', daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        self._lost.set()
+        try:
+            self.sio.disconnect()
+        except Exception:
+            pass
+        if self._thread is not None:
+            self._thread.join(3.0)
+
+    def wait_connected(self, timeout):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if self.connected:
+                return True
+            time.sleep(0.01)
+        return self.connected
+
+    def _on_connected(self):
+        if self.hold_on_connect:
+            self.sio.emit(proto.EV_HOLD, {'id': self.next_id()})
+        if self.subscribe:
+            r = self.sio.call(proto.EV_SUBSCRIBE_STATE, {}, timeout=2.0)
+            if isinstance(r, dict):
+                self.info = r.get('info')
+        if self.on_connection:
+            self.on_connection(True)
+
+    def _supervise(self):
+        backoff = self.backoff_initial
+        while not self._stop.is_set():
+            try:
+                self._lost.clear()
+                self.sio.connect(self.url, transports=['websocket'], wait_timeout=2)
+                self._on_connected()
+                backoff = self.backoff_initial
+                self._lost.wait()
+            except Exception as e:  # connection refused, timeout, server gone mid-handshake
+                self.log.debug('connect to %s failed: %s', self.url, e)
+            try:
+                self.sio.disconnect()
+            except Exception:
+                pass
+            self.connected = False
+            if self._stop.is_set():
+                break
+            self._stop.wait(backoff * random.uniform(0.5, 1.5))
+            backoff = min(2.0 * backoff, self.backoff_max)
+
+    # ------------------------------------------------------------------ commands
+    def emit(self, event, payload):
+        """Fire-and-forget; returns False (nothing queued) when not connected."""
+        if not self.connected:
+            return False
+        try:
+            self.sio.emit(event, payload)
+            return True
+        except Exception:
+            return False
+
+    def call(self, event, payload, timeout=1.0):
+        """Send and wait for the ack dict; raises :class:`NotConnected` or TimeoutError."""
+        if not self.connected:
+            raise NotConnected('not connected to %s' % self.url)
+        try:
+            r = self.sio.call(event, payload, timeout=timeout)
+        except socketio.exceptions.TimeoutError:
+            raise TimeoutError('%s: no answer within %g s' % (event, timeout))
+        except socketio.exceptions.BadNamespaceError:
+            raise NotConnected('not connected to %s' % self.url)
+        if not isinstance(r, dict):
+            raise TimeoutError('%s: malformed answer %r' % (event, r))
+        return r
+
+    def send_target(self, position, orientation=None):
+        return self.emit(proto.EV_SET_TARGET, proto.make_set_target(self.next_id(), position, orientation))

@@ -1,0 +1,74 @@
+"""Helpers for the touchball rostests: a fake console that sends protocol packets (the same
+touchball_protocol module as everything else) and records the command packets it gets back."""
+import math
+import socket
+import threading
+import time
+
+from saras_drivers import touchball_protocol as tp
+
+
+def device(t, offset=0.0):
+    """A known, smooth device state at time t [s] (used to check the published values)."""
+    a = 0.5 * t + offset
+    return tp.DeviceState((-0.12 + 0.01 * math.sin(a), 0.02 * math.cos(a), 0.07 + offset),
+                          (0.0, 0.0, math.sin(a / 2), math.cos(a / 2)), 0.3 + 0.1 * math.sin(a),
+                          int(t) % 2 == 0, False)
+
+
+class FakeConsole(object):
+    def __init__(self, port, command_port, source='127.0.0.1'):
+        self.dest = ('127.0.0.1', port)
+        self.tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.tx.bind((source, 0))
+        self.rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.rx.bind(('127.0.0.1', command_port))
+        self.rx.settimeout(0.05)
+        self.seq = 0
+        self.epoch = time.time()       # sender_time = wall clock, as the real controller sends
+        self.sent = {}
+        self.commands = []
+        self._stop = threading.Event()
+        self._rx_thread = threading.Thread(target=self._receive, daemon=True)
+        self._rx_thread.start()
+
+    def _receive(self):
+        while not self._stop.is_set():
+            try:
+                data, _ = self.rx.recvfrom(2048)
+            except socket.timeout:
+                continue
+            except OSError:
+                return
+            self.commands.append((time.monotonic(), data))
+
+    def send_raw(self, data):
+        self.tx.sendto(data, self.dest)
+
+    def send(self, t):
+        devs = (device(t), device(t, 0.01))
+        data = tp.pack_state(self.seq, self.epoch + t, devs)
+        self.sent[self.seq] = devs
+        self.seq += 1
+        self.tx.sendto(data, self.dest)
+        return data
+
+    def stream(self, rate, duration, t0=0.0):
+        """Send at `rate` Hz for `duration` s (absolute schedule); returns the time of the last send."""
+        period = 1.0 / rate
+        start = time.monotonic()
+        n = int(round(duration * rate))
+        last = start
+        for k in range(n):
+            deadline = start + k * period
+            d = deadline - time.monotonic()
+            if d > 0:
+                time.sleep(d)
+            self.send(t0 + k * period)
+            last = time.monotonic()
+        return last
+
+    def close(self):
+        self._stop.set()
+        self.tx.close()
+        self.rx.close()

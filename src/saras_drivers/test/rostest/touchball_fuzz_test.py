@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""rostest: malformed, replayed, reordered and foreign datagrams never reach a topic, never get a
+command packet back, and every one is counted in touchball/status."""
+import random
+import struct
+import sys
+import time
+import unittest
+import zlib
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+
+from saras_drivers import touchball_protocol as tp
+from saras_msgs.msg import ComponentStatus
+from touchball_fake_console import FakeConsole
+
+
+class TestFuzz(unittest.TestCase):
+    def test_fuzz(self):
+        port, cmd_port = rospy.get_param('~port'), rospy.get_param('~command_port')
+        poses, status = [], []
+        rospy.Subscriber('/touchball/left/pose', PoseStamped, poses.append, queue_size=1000)
+        rospy.Subscriber('/touchball/status', ComponentStatus, status.append, queue_size=100)
+        console = FakeConsole(port, cmd_port)
+        foreign = FakeConsole(port, cmd_port + 1, source='127.0.0.2')
+        time.sleep(1.0)
+        good = [console.send(0.001 * k) for k in range(5)]
+        time.sleep(0.3)
+        self.assertEqual(len(poses), 5)
+        n_cmd = len(console.commands)
+        self.assertEqual(n_cmd, 5)
+        rng = random.Random(7)
+        bad = []
+        for _ in range(300):
+            bad.append(bytes(rng.getrandbits(8) for _ in range(rng.choice([0, 3, 159, 160, 161, 1000]))))
+        for k in range(0, 160, 9):
+            bad.append(good[-1][:k])
+        for _ in range(100):
+            b = bytearray(good[-1])
+            b[rng.randrange(160)] ^= 1 << rng.randrange(8)
+            bad.append(bytes(b))
+        body = good[-1][:4] + b'\x09' + good[-1][5:-4]
+        bad.append(body + struct.pack('<I', zlib.crc32(body)))
+        nan = good[-1][:20] + struct.pack('<d', float('nan')) + good[-1][28:-4]
+        bad.append(nan + struct.pack('<I', zlib.crc32(nan)))
+        bad += good                                            # replays
+        bad.append(tp.pack_state(2, 0.0, console.sent[2]))     # reordered (older sequence)
+        for data in bad:
+            console.send_raw(data)
+            time.sleep(0.0005)
+        foreign.seq = 1000
+        for k in range(20):
+            foreign.send(1.0 + 0.001 * k)                      # valid packets, foreign source
+        time.sleep(0.5)
+        self.assertEqual(len(poses), 5, 'a rejected datagram was published')
+        self.assertEqual(len(console.commands), n_cmd, 'a rejected datagram got a command back')
+        self.assertEqual(len(foreign.commands), 0)
+        st = status[-1]
+        self.assertEqual(st.received, 5)
+        self.assertEqual(st.rejected, len(bad) + 20)
+        # the link still works afterwards
+        console.seq = 100
+        console.send(2.0)
+        time.sleep(0.3)
+        self.assertEqual(len(poses), 6)
+        console.close()
+        foreign.close()
+
+
+if __name__ == '__main__':
+    rospy.init_node('touchball_fuzz_test')
+    rostest.rosrun('saras_drivers', 'touchball_fuzz', TestFuzz, sys.argv)

@@ -1,0 +1,163 @@
+"""Core tests of saras_drivers.dvrk_motion (no roscore)."""
+import math
+import os
+
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+
+from saras_drivers import dvrk_motion as dm
+from saras_drivers import rigid
+
+CONFIG = os.path.join(os.path.dirname(__file__), '..', 'config', 'dvrk_sim.yaml')
+FRAMES = os.path.join(os.path.dirname(__file__), '..', '..', 'saras_bringup', 'config',
+                      'world_frames.yaml')
+
+
+def test_quaternion_round_trip_matches_scipy():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        R_ref = Rotation.from_quat(q).as_matrix()
+        np.testing.assert_allclose(rigid.matrix_from_quaternion(q), R_ref, atol=1e-12)
+        q2 = rigid.quaternion_from_matrix(R_ref)
+        assert min(np.linalg.norm(q2 - q), np.linalg.norm(q2 + q)) < 1e-9
+    R = rigid.rpy_to_matrix(0.1, -0.4, 2.0)
+    np.testing.assert_allclose(R, Rotation.from_euler('xyz', [0.1, -0.4, 2.0]).as_matrix(), atol=1e-12)
+
+
+def test_psm_zero_pose_points_down_negative_z():
+    kin = dm.StandInKinematics(wrist_length=0.0091)
+    T = kin.psm_tip_in_base([0, 0, 0.12, 0, 0, 0])
+    np.testing.assert_allclose(T[:3, 3], [0, 0, -0.1291], atol=1e-12)
+    # tip z axis along the shaft, away from the RCM
+    np.testing.assert_allclose(T[:3, 2], [0, 0, -1], atol=1e-12)
+
+
+def test_psm_ik_position_inverts_fk_pivot():
+    kin = dm.StandInKinematics(wrist_length=0.0)
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        p = rng.uniform([-0.1, -0.1, -0.2], [0.1, 0.1, -0.05])
+        q = list(kin.psm_ik_position(p)) + [rng.uniform(-3, 3), 0.0, 0.0]
+        T = kin.psm_tip_in_base(q)
+        np.testing.assert_allclose(T[:3, 3], p, atol=1e-12)
+        R = T[:3, :3]
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+        assert abs(np.linalg.det(R) - 1) < 1e-12
+        # the shaft passes through the RCM: tip direction parallel to the position vector
+        np.testing.assert_allclose(R[:, 2], p / np.linalg.norm(p), atol=1e-12)
+
+
+def test_wrist_offsets_tip_along_wrist_axis():
+    kin = dm.StandInKinematics(wrist_length=0.01)
+    q = [0.2, -0.1, 0.1, 0.3, 0.5, 0.0]
+    T0 = dm.StandInKinematics(wrist_length=0.0).psm_tip_in_base(q)
+    T = kin.psm_tip_in_base(q)
+    assert abs(np.linalg.norm(T[:3, 3] - T0[:3, 3]) - 0.01) < 1e-12
+    # wrist pitch rotates the jaw axis away from the shaft by exactly the joint angle
+    shaft = T0[:3, 3] / np.linalg.norm(T0[:3, 3])
+    assert math.acos(np.clip(np.dot(T[:3, 2], shaft), -1, 1)) == pytest.approx(0.5, abs=1e-9)
+
+
+def test_ecm_camera_frames_baseline():
+    kin = dm.StandInKinematics(baseline=0.005)
+    Tl, Tr = kin.camera_in_tip('left'), kin.camera_in_tip('right')
+    # right eye is +x of the left one in the optical frame (ROS stereo convention, P[0,3] < 0)
+    np.testing.assert_allclose(rigid.invert(Tl) @ Tr[:, 3], [0.005, 0, 0, 1], atol=1e-15)
+
+
+def test_suturing_motion_is_continuous_and_dips():
+    m = dm.SuturingMotion(centre=[-0.08, 0.05, -0.125], drive_dir=[0, 1, 0], wound_dir=[1, 0, 0],
+                          arc_radius=0.012, lift=0.025, period=8.0, stitches=4)
+    ts = np.arange(0.0, 40.0, 0.001)
+    pts = np.array([m.wrist_point(t)[0] for t in ts])
+    steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    # continuous, max speed < 0.05 m/s (no jump anywhere, also at stitch changes and wrap-around)
+    assert steps.max() < 0.05 * 0.001
+    assert pts[:, 2].min() == pytest.approx(-0.125 - 0.012, abs=1e-4)
+    assert pts[:, 2].max() == pytest.approx(-0.125 + 0.025, abs=1e-4)
+
+
+def test_suturing_stitches_go_back_and_forth_along_the_wound():
+    m = dm.SuturingMotion(centre=[0, 0, -0.12], wound_dir=[1, 0, 0], period=8.0, stitches=4,
+                          stitch_spacing=0.006)
+    xs = [m.wrist_point(8.0 * k + 1.0)[0][0] for k in range(8)]
+    np.testing.assert_allclose(xs, np.array([-1.5, -0.5, 0.5, 1.5, 0.5, -0.5, -1.5, -0.5]) * 0.006
+                               + m.wrist_point(1.0)[0][0] + 0.009, atol=1e-12)
+
+
+def test_ecm_dwells_then_moves():
+    e = dm.EcmMotion([{'look_at': [-0.13, 0, -0.17], 'insertion': 0.09},
+                      {'look_at': [-0.12, 0.03, -0.17], 'insertion': 0.085}], dwell=5.0, move_time=2.0)
+    q0 = e.joints(0.0)
+    assert e.joints(4.99) == q0
+    mid = e.joints(6.0)
+    end = e.joints(7.0)
+    assert mid != q0 and end != q0
+    yaw, pitch = dm.direction_to_yaw_pitch([-0.12, 0.03, -0.17])
+    np.testing.assert_allclose(end, [yaw, pitch, 0.085, 0.0], atol=1e-12)
+    # back to the first viewpoint after the second dwell + move
+    np.testing.assert_allclose(e.joints(14.0), q0, atol=1e-12)
+
+
+def test_shipped_config_puts_tips_in_contract_workspace():
+    with open(CONFIG) as f:
+        cfg = yaml.safe_load(f)
+    core = dm.DvrkSimCore.from_config(cfg, kinematics=dm.StandInKinematics())
+    frames = rigid.load_frames_file(FRAMES)
+    for t in np.arange(0.0, 60.0, 0.37):
+        s = core.sample(t)
+        assert set(s) == {'PSM1', 'PSM2', 'ECM'}
+        for arm in ('PSM1', 'PSM2'):
+            q, T = s[arm]
+            assert len(q) == len(dm.PSM_JOINT_NAMES)
+            r = np.linalg.norm(T[:3, 3])
+            assert 0.10 <= r <= 0.18, (arm, t, r)     # 10-18 cm below the RCM
+            assert T[2, 3] < 0
+            tip_w = frames[arm][1] @ np.append(T[:3, 3], 1.0)
+            assert np.linalg.norm(tip_w[:2] - [0.02, 0.0]) < 0.06  # near the surgical site
+        q, T = s['ECM']
+        assert len(q) == len(dm.ECM_JOINT_NAMES)
+        assert T[2, 3] < 0
+
+
+def test_bad_config_names_parameter():
+    with pytest.raises(ValueError, match='psm/PSM1'):
+        dm.DvrkSimCore.from_config({'psm': {'PSM1': {'centre': [0, 'x', 0]}}},
+                                   kinematics=dm.StandInKinematics())
+    with pytest.raises(ValueError, match='ecm'):
+        dm.DvrkSimCore.from_config({'ecm': {'viewpoints': [{'look_at': [0, 0, -1], 'insertion': 5}]}},
+                                   kinematics=dm.StandInKinematics())
+
+
+def test_replay_schedule_plays_each_record_once_and_loops():
+    recs = [(10.0 + 0.01 * i, 'k', i) for i in range(100)]
+    sch = dm.ReplaySchedule(recs, loop=True)
+    got = []
+    for k in range(1, 250):
+        got.extend(r[2] for r in sch.due(k * 0.01 + 1e-9))
+    assert got[:100] == list(range(100))
+    assert got[100:200] == list(range(100))   # second pass identical
+    sch2 = dm.ReplaySchedule(recs, loop=False)
+    assert [r[2] for r in sch2.due(5.0)] == list(range(100))
+    assert sch2.finished and sch2.due(6.0) == []
+    with pytest.raises(ValueError):
+        dm.ReplaySchedule([])
+
+
+def test_description_adapter_uses_module_functions():
+    class Fake(object):
+        @staticmethod
+        def psm_tip_in_base(q):
+            return np.eye(4) * 2
+
+        @staticmethod
+        def ecm_tip_in_base(q):
+            return np.eye(4) * 3
+    k = dm.DescriptionKinematics(Fake, dm.StandInKinematics())
+    assert k.psm_tip_in_base([0] * 6)[0, 0] == 2
+    assert k.ecm_tip_in_base([0] * 4)[0, 0] == 3
+    assert k.psm_ik_position([0, 0, -0.1])[2] == pytest.approx(0.1)

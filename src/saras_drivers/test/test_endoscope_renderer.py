@@ -1,0 +1,184 @@
+"""Core tests of saras_drivers.endoscope_renderer: camera model and projection truth (no roscore)."""
+import os
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+
+from saras_drivers import endoscope_renderer as er
+from saras_drivers import rigid
+from saras_drivers.tissue_surface import TissueSurface
+
+CFG = os.path.join(os.path.dirname(__file__), '..', 'config')
+
+
+@pytest.fixture(scope='module')
+def cams():
+    return {eye: er.CameraModel.from_yaml_file(os.path.join(CFG, 'endoscope_%s.yaml' % eye))
+            for eye in ('left', 'right')}
+
+
+def look_at(eye_pos, target, up=(1.0, 0.0, 0.0)):
+    """T_world_cam of an optical frame at eye_pos looking at target (independent construction)."""
+    z = np.asarray(target, float) - eye_pos
+    z /= np.linalg.norm(z)
+    x = np.cross(up, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return rigid.make_transform(np.column_stack([x, y, z]), eye_pos)
+
+
+def test_shipped_camera_infos_are_a_consistent_stereo_pair(cams):
+    left, right = cams['left'], cams['right']
+    assert (left.width, left.height) == (right.width, right.height) == (1280, 720)
+    np.testing.assert_allclose(left.K, right.K)
+    assert left.distortion_model == right.distortion_model == 'plumb_bob'
+    assert left.P[0, 3] == 0.0
+    baseline = -right.P[0, 3] / right.P[0, 0]
+    assert baseline == pytest.approx(0.005, abs=1e-9)   # ~5 mm, the hand-eye frames use the same
+    with open(os.path.join(CFG, 'endoscope_left.yaml')) as f:
+        d = yaml.safe_load(f)
+    assert er.CameraModel.from_yaml_dict(left.to_yaml_dict()).to_yaml_dict() == left.to_yaml_dict()
+    assert d['camera_matrix']['data'] == list(left.K.ravel())
+
+
+def test_bad_camera_info_is_rejected():
+    with pytest.raises(ValueError, match='image_width'):
+        er.CameraModel.from_yaml_dict({'camera_matrix': {'data': [1] * 9}})
+    with pytest.raises(ValueError, match='fx'):
+        er.CameraModel(10, 10, np.zeros((3, 3)), [0] * 5)
+    with pytest.raises(ValueError, match='distortion_model'):
+        er.CameraModel(10, 10, np.eye(3), [0] * 5, distortion_model='fisheye')
+
+
+def test_pixel_rays_reproject_onto_their_pixels(cams):
+    cam = cams['left']
+    rays = cam.pixel_rays()
+    sel = rays[::37, ::41].reshape(-1, 3).astype(np.float64)
+    uv = cam.project(sel)
+    v, u = np.mgrid[0:cam.height:37, 0:cam.width:41]
+    np.testing.assert_allclose(uv, np.stack([u.ravel(), v.ravel()], -1), atol=2e-3)
+
+
+def test_scaled_model_projects_consistently(cams):
+    cam = cams['left']
+    big = cam.scaled(1920, 1080)
+    X = np.array([[0.01, -0.02, 0.1], [-0.03, 0.01, 0.12]])
+    np.testing.assert_allclose(big.project(X), (cam.project(X) + 0.5) * 1.5 - 0.5, atol=1e-9)
+
+
+def render_target(cam, target, T_wc, T_wb):
+    surf = TissueSurface(z0=-1.0, waves=())
+    r = er.SceneRenderer(cam, surf, target=(target, T_wb), texture_size=256)
+    return r.render(T_wc)
+
+
+def test_checkerboard_corners_land_on_their_projection(cams):
+    """Projection truth: detected (rendered) corners vs projectPoints(K, D) of the 3D corners."""
+    cam = cams['left']
+    board = er.PlanarTarget.checkerboard(cols=8, rows=6, square=0.008)
+    T_wb = rigid.make_transform(rigid.rpy_to_matrix(np.pi + 0.2, -0.15, 0.4), [0.0, 0.0, 0.0])
+    T_wc = look_at(np.array([-0.02, 0.03, 0.11]), [0.028, 0.02, 0.0])
+    img = render_target(cam, board, T_wc, T_wb)
+    gray = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    ok, corners = cv2.findChessboardCorners(gray, (8, 6))
+    assert ok
+    corners = cv2.cornerSubPix(gray, corners, (7, 7), (-1, -1),
+                               (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 50, 1e-4)).reshape(-1, 2)
+    T_cb = rigid.invert(T_wc) @ T_wb
+    uv = cam.project(board.points @ T_cb[:3, :3].T + T_cb[:3, 3])
+    # every projected corner inside the image, matched to a detected corner within 0.3 px
+    err = np.linalg.norm(uv[:, None, :] - corners[None], axis=2).min(axis=1)
+    assert len(err) == 48 and err.max() < 0.3, err.max()
+
+
+def test_circular_pattern_markers_and_dots(cams):
+    cam = cams['left']
+    board = er.PlanarTarget.circles()
+    # printed side faces -z of the board frame (OpenCV convention): roll ~pi to face the camera above
+    T_wb = rigid.make_transform(rigid.rpy_to_matrix(np.pi + 0.1, 0.05, 0.2), [0.0, 0.0, 0.0])
+    T_wc = look_at(np.array([0.0, 0.0, 0.25]), [0.0, 0.0, 0.0])
+    img = render_target(cam, board, T_wc, T_wb)
+    gray = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    T_cb = rigid.invert(T_wc) @ T_wb
+    proj = lambda P: cam.project(P @ T_cb[:3, :3].T + T_cb[:3, 3])  # noqa: E731
+    aruco = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    params = cv2.aruco.DetectorParameters_create()
+    params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+    corners, ids, _ = cv2.aruco.detectMarkers(gray, aruco, parameters=params)
+    assert ids is not None and sorted(ids.ravel().tolist()) == [0, 1, 2, 3]
+    for c, i in zip(corners, ids.ravel()):
+        expect = proj(board.marker_corners[int(i)])
+        assert np.abs(c.reshape(4, 2) - expect).max() < 0.7
+    # dot centres: dark blob centroids vs projected centres (5 mm dots, 8 on a 100 mm circle)
+    _, bw = cv2.threshold(gray, 100, 255, cv2.THRESH_BINARY_INV)
+    n, _, stats, cents = cv2.connectedComponentsWithStats(bw)
+    expect = proj(board.points)
+    for e in expect:
+        d = np.linalg.norm(cents[1:] - e, axis=1)
+        j = int(np.argmin(d))
+        assert d[j] < 0.5 and 20 < stats[j + 1, cv2.CC_STAT_AREA] < 400
+
+
+def test_tissue_depth_matches_surface_and_cache():
+    cam = er.CameraModel(320, 180, [[240, 0, 159.5], [0, 240, 89.5], [0, 0, 1]], [-0.1, 0.02, 0, 0, 0])
+    surf = TissueSurface(z0=0.07)
+    r = er.SceneRenderer(cam, surf, texture_size=1024)
+    T_wc = look_at(np.array([0.08, 0.0, 0.17]), [0.0, 0.0, 0.07])
+    img, depth = r.render_background(T_wc)
+    rays = cam.pixel_rays()
+    v, u = np.mgrid[5:175:17, 7:315:23]
+    for vv, uu in zip(v.ravel(), u.ravel()):
+        p = T_wc[:3, :3] @ (rays[vv, uu] * depth[vv, uu]) + T_wc[:3, 3]
+        assert abs(p[2] - surf.height(p[0], p[1])) < 2e-4    # on the analytic surface
+    assert img.mean() > 40
+    r.render(T_wc)
+    r.render(T_wc)
+    assert r.background_renders == 1
+    r.render(look_at(np.array([0.081, 0.0, 0.17]), [0.0, 0.0, 0.07]))
+    assert r.background_renders == 2
+
+
+def test_bone_box_renders_at_its_projection_with_exact_depth():
+    cam = er.CameraModel(320, 240, [[250, 0, 159.5], [0, 250, 119.5], [0, 0, 1]], [0] * 5)
+    box = np.array([[x, y, z] for x in (-0.01, 0.01) for y in (-0.01, 0.01) for z in (0.0, 0.02)])
+    r = er.SceneRenderer(cam, TissueSurface(z0=-1.0, waves=()), boxes=[box], texture_size=128)
+    T_wc = look_at(np.array([0.0, 0.0, 0.12]), [0.0, 0.0, 0.0])
+    img, depth = r.render_background(T_wc)
+    assert depth[120, 160] == pytest.approx(0.10, abs=1e-6)    # top face at z = 0.02
+    assert img[120, 160, 2] > 150                              # ivory
+    u = cam.project(np.array([[0.0115, 0.0, 0.10]]))[0]        # just outside the top face
+    assert np.isinf(depth[int(round(u[1])), int(round(u[0])) + 0]) or \
+        depth[int(round(u[1])), int(round(u[0]))] > 0.1
+
+
+def test_shafts_drawn_above_tissue_only():
+    cam = er.CameraModel(320, 240, [[250, 0, 159.5], [0, 250, 119.5], [0, 0, 1]], [0] * 5)
+    surf = TissueSurface(z0=0.0, waves=())
+    r = er.SceneRenderer(cam, surf, texture_size=128)
+    T_wc = look_at(np.array([0.0, 0.0, 0.12]), [0.0, 0.0, 0.0])
+    bg = r.render(T_wc).copy()
+    above = r.render(T_wc, [(np.array([0.0, -0.03, 0.02]), np.array([0.0, 0.15, 0.3]), 0.004)]).copy()
+    below = r.render(T_wc, [(np.array([0.0, -0.03, -0.02]), np.array([0.0, 0.03, -0.01]), 0.004)])
+    mid = cam.project((rigid.invert(T_wc) @ np.array([0.0, -0.03, 0.02, 1.0]))[None, :3])[0]
+    u, v = int(round(mid[0])), int(round(mid[1]))
+    assert np.abs(above[v, u].astype(int) - bg[v, u]).sum() > 30
+    assert np.array_equal(below, bg)
+
+
+def test_load_boxes(tmp_path):
+    p = tmp_path / 'v.txt'
+    lines = ['# two boxes, mm', '2'] + ['%d %d %d' % (x, y, z) for _ in range(2)
+                                       for x in (0, 10) for y in (0, 20) for z in (0, 30)]
+    p.write_text('\n'.join(lines) + '\n')
+    boxes = er.load_boxes(str(p), scaling=0.001)
+    assert len(boxes) == 2 and boxes[0][-1].tolist() == [0.01, 0.02, 0.03]
+    c, axes, half = er.box_from_vertices(boxes[0])
+    np.testing.assert_allclose(sorted(half), [0.005, 0.01, 0.015])
+    p.write_text('2\n1 2 3\n')
+    with pytest.raises(ValueError, match='expected 2 boxes'):
+        er.load_boxes(str(p))
+    p.write_text('1\n' + 'a b c\n' * 8)
+    with pytest.raises(ValueError, match='not numeric'):
+        er.load_boxes(str(p))

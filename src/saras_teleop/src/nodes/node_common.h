@@ -1,0 +1,190 @@
+/**
+ * @file node_common.h
+ * @brief Shared helpers of the saras_teleop node adapters: validated parameters, message <-> Eigen
+ *        conversions, the ComponentStatus heartbeat.
+ */
+#ifndef SARAS_TELEOP_NODE_COMMON_H
+#define SARAS_TELEOP_NODE_COMMON_H
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/Wrench.h>
+#include <ros/ros.h>
+#include <saras_msgs/ComponentStatus.h>
+
+#include "saras_teleop/energy_tank.h"
+
+namespace saras_teleop
+{
+namespace node
+{
+/// Read a finite double (default if absent); throws std::invalid_argument naming the parameter.
+inline double paramDouble(const ros::NodeHandle& nh, const std::string& name, double def)
+{
+  double v = def;
+  if (nh.hasParam(name) && !nh.getParam(name, v))
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a number");
+  if (!std::isfinite(v))
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be finite");
+  return v;
+}
+
+inline double paramPositive(const ros::NodeHandle& nh, const std::string& name, double def)
+{
+  const double v = paramDouble(nh, name, def);
+  if (!(v > 0.0))
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be > 0");
+  return v;
+}
+
+inline std::string paramString(const ros::NodeHandle& nh, const std::string& name, const std::string& def)
+{
+  std::string v = def;
+  if (nh.hasParam(name) && !nh.getParam(name, v))
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a string");
+  if (v.empty())
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must not be empty");
+  return v;
+}
+
+/// A list of n finite numbers, or one number used for every entry.
+inline Eigen::VectorXd paramVector(const ros::NodeHandle& nh, const std::string& name, const Eigen::VectorXd& def)
+{
+  if (!nh.hasParam(name))
+    return def;
+  const long n = def.size();
+  std::vector<double> v;
+  double scalar;
+  if (nh.getParam(name, v))
+  {
+    if (static_cast<long>(v.size()) != n)
+      throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must have " + std::to_string(n) +
+                                  " values");
+  }
+  else if (nh.getParam(name, scalar))
+  {
+    v.assign(n, scalar);
+  }
+  else
+  {
+    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a list of numbers");
+  }
+  Eigen::VectorXd out(n);
+  for (long i = 0; i < n; ++i)
+  {
+    if (!std::isfinite(v[i]))
+      throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be finite");
+    out[i] = v[i];
+  }
+  return out;
+}
+
+inline std::vector<std::string> paramChannels(const ros::NodeHandle& nh)
+{
+  std::vector<std::string> ch{ "left", "right" };
+  if (nh.hasParam("channels") && !nh.getParam("channels", ch))
+    throw std::invalid_argument("parameter '" + nh.resolveName("channels") + "' must be a list of strings");
+  if (ch.empty())
+    throw std::invalid_argument("parameter '" + nh.resolveName("channels") + "' must not be empty");
+  return ch;
+}
+
+inline Vector6d toVec(const geometry_msgs::Twist& t)
+{
+  Vector6d v;
+  v << t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z;
+  return v;
+}
+
+inline Vector6d toVec(const geometry_msgs::Wrench& w)
+{
+  Vector6d v;
+  v << w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z;
+  return v;
+}
+
+inline void fromVec(const Vector6d& v, geometry_msgs::Twist& t)
+{
+  t.linear.x = v[0];
+  t.linear.y = v[1];
+  t.linear.z = v[2];
+  t.angular.x = v[3];
+  t.angular.y = v[4];
+  t.angular.z = v[5];
+}
+
+inline void fromVec(const Vector6d& v, geometry_msgs::Wrench& w)
+{
+  w.force.x = v[0];
+  w.force.y = v[1];
+  w.force.z = v[2];
+  w.torque.x = v[3];
+  w.torque.y = v[4];
+  w.torque.z = v[5];
+}
+
+/// Heartbeat on /saras/status: 1 Hz and immediately when the level changes.
+class StatusReporter
+{
+public:
+  StatusReporter(ros::NodeHandle& nh, const std::string& component) : component_(component)
+  {
+    pub_ = nh.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
+    msg_.component = component;
+  }
+  /// Update the state; publishes if the level changed or a second has passed since the last heartbeat.
+  void update(uint8_t level, const std::string& message, double input_age, uint64_t received, uint64_t rejected)
+  {
+    const ros::Time now = ros::Time::now();
+    const bool changed = level != msg_.level || !published_;
+    msg_.level = level;
+    if (changed || message != msg_.message)
+      msg_.message = message;
+    msg_.input_age = input_age;
+    msg_.received = received;
+    msg_.rejected = rejected;
+    if (changed || (now - last_).toSec() >= 1.0)
+    {
+      msg_.header.stamp = now;
+      pub_.publish(msg_);
+      last_ = now;
+      published_ = true;
+    }
+  }
+
+private:
+  std::string component_;
+  ros::Publisher pub_;
+  saras_msgs::ComponentStatus msg_;
+  ros::Time last_;
+  bool published_ = false;
+};
+
+/// Run a node object; a std::exception at start-up (bad parameter) ends the process with status 1.
+template <class Node>
+int runNode(int argc, char** argv, const char* name)
+{
+  ros::init(argc, argv, name);
+  try
+  {
+    ros::NodeHandle nh, pnh("~");
+    Node node(nh, pnh);
+    ros::spin();
+  }
+  catch (const std::exception& e)
+  {
+    ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), e.what());
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace node
+}  // namespace saras_teleop
+
+#endif  // SARAS_TELEOP_NODE_COMMON_H

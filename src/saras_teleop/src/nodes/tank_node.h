@@ -1,0 +1,313 @@
+/**
+ * @file tank_node.h
+ * @brief ROS adapter of EnergyTank, shared by tank_master (wrench actions, measured master twists)
+ *        and tank_slave (twist actions, measured interaction forces). One instance serves all channels.
+ *
+ * Relative names (remapped by the launch files), for each channel c in ~channels:
+ *   master: sub c/meas_cart_vel (TwistStamped), c/des_wrench (WrenchStamped); pub c/tank_wrench
+ *   slave:  sub c/contact_force (Twist, linear = force of the environment on the tool [N]),
+ *           c/des_twist (TwistStamped); pub c/tank_twist
+ *   both:   sub pin, ext_ereq (Float32); pub pout, ereq (Float32), energy (Float64, T [J]).
+ *
+ * Timing: the tank steps when the trigger input of a channel arrives (master: the measured twist,
+ * i.e. each device sample; slave: the desired twist) and publishes that channel at once; a timer at
+ * ~rate steps and publishes every channel if no input triggered a step for 1.5 periods.
+ * Energy exchange: a pout message carries the energy sent since the previous one divided by the
+ * exchange period 1/rate [W]; the receiver credits msg * (1/rate) [J] once per message, so a lost or
+ * delayed packet can only lose energy, never duplicate it (a latched power would).
+ * Safety: a port whose action (or, with ~require_measurement, its measurement) is older than
+ * ~input_timeout gets a zero action (only damping); non-finite inputs are rejected (counted) and
+ * ignored. tank_slave defaults to require_measurement false: without a contact estimator the
+ * interaction force is taken as zero (free motion) and the status says so (WARN).
+ */
+#ifndef SARAS_TELEOP_TANK_NODE_H
+#define SARAS_TELEOP_TANK_NODE_H
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <ros/ros.h>
+#include <std_msgs/Float32.h>
+#include <std_msgs/Float64.h>
+
+#include "node_common.h"
+#include "saras_teleop/energy_tank.h"
+
+namespace saras_teleop
+{
+namespace node
+{
+struct MasterTraits
+{
+  typedef geometry_msgs::WrenchStamped Desired;
+  typedef geometry_msgs::TwistStamped Conjugate;
+  typedef geometry_msgs::WrenchStamped Output;
+  static constexpr const char* kName = "tank_master";
+  static constexpr const char* kDesired = "des_wrench";
+  static constexpr const char* kConjugate = "meas_cart_vel";
+  static constexpr const char* kOutput = "tank_wrench";
+  static constexpr bool kTriggerOnDesired = false;
+  static constexpr bool kRequireMeasurement = true;
+  static Vector6d desired(const Desired& m) { return toVec(m.wrench); }
+  static Vector6d conjugate(const Conjugate& m, double /*sign*/) { return toVec(m.twist); }
+  static ros::Time stamp(const Conjugate& m) { return m.header.stamp; }
+  static void fill(const Vector6d& v, Output& o) { fromVec(v, o.wrench); }
+};
+
+struct SlaveTraits
+{
+  typedef geometry_msgs::TwistStamped Desired;
+  typedef geometry_msgs::Twist Conjugate;
+  typedef geometry_msgs::TwistStamped Output;
+  static constexpr const char* kName = "tank_slave";
+  static constexpr const char* kDesired = "des_twist";
+  static constexpr const char* kConjugate = "contact_force";
+  static constexpr const char* kOutput = "tank_twist";
+  static constexpr bool kTriggerOnDesired = true;
+  static constexpr bool kRequireMeasurement = false;  // no contact estimator running = free motion
+  static Vector6d desired(const Desired& m) { return toVec(m.twist); }
+  /// Effort the tool exerts on the environment = sign * (force of the environment on the tool).
+  static Vector6d conjugate(const Conjugate& m, double sign)
+  {
+    Vector6d v = Vector6d::Zero();
+    v << sign * m.linear.x, sign * m.linear.y, sign * m.linear.z, 0.0, 0.0, 0.0;
+    return v;
+  }
+  static ros::Time stamp(const Conjugate& /*m*/) { return ros::Time(); }
+  static void fill(const Vector6d& v, Output& o) { fromVec(v, o.twist); }
+};
+
+template <class Traits>
+class TankNode
+{
+public:
+  TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : status_(nh, std::string("teleop/") + Traits::kName)
+  {
+    TankParams p;
+    p.T_init = paramDouble(pnh, "T_init", p.T_init);
+    p.T_max = paramDouble(pnh, "T_max", p.T_max);
+    p.T_min = paramDouble(pnh, "T_min", p.T_min);
+    p.T_req = paramDouble(pnh, "T_req", p.T_req);
+    p.T_ava = paramDouble(pnh, "T_ava", p.T_ava);
+    p.P_const = paramDouble(pnh, "P_const", p.P_const);
+    p.damping_std = paramVector(pnh, "damping_std", p.damping_std);
+    p.damping_max = paramVector(pnh, "damping_max", p.damping_max);
+    pnh.param("bypass", p.bypass, false);
+    const double rate = paramPositive(pnh, "rate", 1000.0);
+    period_ = 1.0 / rate;
+    input_timeout_ = paramPositive(pnh, "input_timeout", 0.1);
+    force_sign_ = paramDouble(pnh, "contact_force_sign", -1.0);
+    pnh.param("require_measurement", require_measurement_, Traits::kRequireMeasurement);
+    const std::vector<std::string> channels = paramChannels(pnh);
+    p.validate();  // throws with the parameter name
+    tank_.reset(new EnergyTank(p, channels.size()));
+    if (p.bypass)
+      ROS_WARN("%s: bypass:=true, the energy tank is DISABLED (passivity not guaranteed)", Traits::kName);
+
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    ports_.resize(channels.size());
+    for (std::size_t i = 0; i < channels.size(); ++i)
+    {
+      Port& pt = ports_[i];
+      pt.name = channels[i];
+      pt.out.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
+      pt.pub = nh.advertise<typename Traits::Output>(channels[i] + "/" + Traits::kOutput, 10);
+      pt.sub_des = nh.subscribe<typename Traits::Desired>(
+          channels[i] + "/" + Traits::kDesired, 10,
+          [this, i](const typename Traits::Desired::ConstPtr& m) { onDesired(i, *m); }, ros::VoidConstPtr(), fast);
+      pt.sub_conj = nh.subscribe<typename Traits::Conjugate>(
+          channels[i] + "/" + Traits::kConjugate, 10,
+          [this, i](const typename Traits::Conjugate::ConstPtr& m) { onConjugate(i, *m); }, ros::VoidConstPtr(),
+          fast);
+    }
+    pin_sub_ = nh.subscribe("pin", 100, &TankNode::onPin, this, fast);
+    ereq_sub_ = nh.subscribe("ext_ereq", 10, &TankNode::onExtEreq, this, fast);
+    pout_pub_ = nh.advertise<std_msgs::Float32>("pout", 100);
+    ereq_pub_ = nh.advertise<std_msgs::Float32>("ereq", 10);
+    energy_pub_ = nh.advertise<std_msgs::Float64>("energy", 10);
+    last_step_ = ros::Time::now();
+    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TankNode::onTimer, this);
+    ROS_INFO("%s: %zu channel(s), T_init %.2f J, rate %.0f Hz", Traits::kName, channels.size(), p.T_init, rate);
+  }
+
+private:
+  struct Port
+  {
+    std::string name;
+    ros::Subscriber sub_des, sub_conj;
+    ros::Publisher pub;
+    typename Traits::Output out;
+    ros::Time t_des, t_conj;  // arrival times (ROS clock)
+    ros::Time stamp;          // header stamp propagated to the output
+    Vector6d des = Vector6d::Zero(), conj = Vector6d::Zero();
+  };
+
+  void onDesired(std::size_t i, const typename Traits::Desired& m)
+  {
+    const Vector6d v = Traits::desired(m);
+    if (!v.allFinite())
+    {
+      reject("non-finite desired action on " + ports_[i].name);
+      return;
+    }
+    ++received_;
+    ports_[i].des = v;
+    ports_[i].t_des = ros::Time::now();
+    if (Traits::kTriggerOnDesired)
+    {
+      ports_[i].stamp = m.header.stamp;
+      stepAndPublish(i);
+    }
+  }
+
+  void onConjugate(std::size_t i, const typename Traits::Conjugate& m)
+  {
+    const Vector6d v = Traits::conjugate(m, force_sign_);
+    if (!v.allFinite())
+    {
+      reject("non-finite measurement on " + ports_[i].name);
+      return;
+    }
+    ++received_;
+    ports_[i].conj = v;
+    ports_[i].t_conj = ros::Time::now();
+    if (!Traits::kTriggerOnDesired)
+    {
+      ports_[i].stamp = Traits::stamp(m);
+      stepAndPublish(i);
+    }
+  }
+
+  void onPin(const std_msgs::Float32::ConstPtr& m)
+  {
+    if (!std::isfinite(m->data) || m->data < 0.0f)
+    {
+      reject("invalid Pin");
+      return;
+    }
+    inbox_ += static_cast<double>(m->data) * period_;
+  }
+
+  void onExtEreq(const std_msgs::Float32::ConstPtr& m)
+  {
+    if (!std::isfinite(m->data))
+    {
+      reject("invalid ext_ereq");
+      return;
+    }
+    ext_ereq_ = m->data;
+  }
+
+  void reject(const std::string& why)
+  {
+    ++rejected_;
+    ROS_ERROR_THROTTLE(1.0, "%s: rejected input (%s); %lu rejected so far", Traits::kName, why.c_str(),
+                       static_cast<unsigned long>(rejected_));
+  }
+
+  /// Step the tank with all ports' latest inputs (stale ports get a zero action).
+  void step(const ros::Time& now)
+  {
+    double dt = (now - last_step_).toSec();
+    last_step_ = now;
+    if (!(dt > 0.0))
+      dt = 1e-6;  // two triggers in the same clock tick: a tiny step keeps the accounting exact
+    dt = std::min(dt, 10.0 * period_);
+    stale_ = false;
+    for (std::size_t i = 0; i < ports_.size(); ++i)
+    {
+      Port& pt = ports_[i];
+      const bool fresh_conj = !pt.t_conj.isZero() && (now - pt.t_conj).toSec() <= input_timeout_;
+      const bool fresh_des = !pt.t_des.isZero() && (now - pt.t_des).toSec() <= input_timeout_;
+      if (!fresh_conj)
+        stale_ = true;
+      tank_->setConjugate(i, fresh_conj ? pt.conj : Vector6d::Zero());
+      // no trustworthy measurement -> the power of the action cannot be accounted -> no action
+      // (unless ~require_measurement is false: the slave then assumes free motion)
+      const bool measured = fresh_conj || !require_measurement_;
+      tank_->setDesired(i, (fresh_des && measured) ? pt.des : Vector6d::Zero());
+    }
+    const double pin = inbox_ / dt;
+    inbox_ = 0.0;
+    tank_->step(dt, pin, ext_ereq_);
+    outbox_ += tank_->pout() * dt;
+  }
+
+  void publishPort(std::size_t i, const ros::Time& stamp)
+  {
+    Port& pt = ports_[i];
+    pt.out.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    Traits::fill(tank_->output(i), pt.out);
+    pt.pub.publish(pt.out);
+  }
+
+  void stepAndPublish(std::size_t i)
+  {
+    const ros::Time now = ros::Time::now();
+    step(now);
+    publishPort(i, ports_[i].stamp);
+    last_trigger_ = now;
+  }
+
+  void onTimer(const ros::SteadyTimerEvent&)
+  {
+    const ros::Time now = ros::Time::now();
+    if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
+    {
+      step(now);
+      for (std::size_t i = 0; i < ports_.size(); ++i)
+        publishPort(i, ros::Time());
+    }
+    // energy exchange: what was sent since the last message, as power over the exchange period
+    pout_msg_.data = static_cast<float>(outbox_ / period_);
+    outbox_ -= static_cast<double>(pout_msg_.data) * period_;  // keep the float rounding for next time
+    pout_pub_.publish(pout_msg_);
+    ereq_msg_.data = static_cast<float>(tank_->ereq());
+    ereq_pub_.publish(ereq_msg_);
+    energy_msg_.data = tank_->energy();
+    energy_pub_.publish(energy_msg_);
+
+    uint8_t level = saras_msgs::ComponentStatus::OK;
+    std::string msg = "tank ok";
+    if (stale_ && require_measurement_)
+    {
+      level = saras_msgs::ComponentStatus::STALE;
+      msg = "measurement inputs stale: actions zeroed";
+    }
+    else if (stale_)
+    {
+      level = saras_msgs::ComponentStatus::WARN;
+      msg = "no interaction-force measurement: assuming free motion";
+    }
+    else if (tank_->energy() < tank_->params().T_req)
+    {
+      level = saras_msgs::ComponentStatus::WARN;
+      msg = "tank low: set-points reduced";
+    }
+    status_.update(level, msg, 0.0, received_, rejected_);
+  }
+
+  std::unique_ptr<EnergyTank> tank_;
+  std::vector<Port> ports_;
+  ros::Subscriber pin_sub_, ereq_sub_;
+  ros::Publisher pout_pub_, ereq_pub_, energy_pub_;
+  ros::SteadyTimer timer_;
+  std_msgs::Float32 pout_msg_, ereq_msg_;
+  std_msgs::Float64 energy_msg_;
+  StatusReporter status_;
+  double period_ = 0.001, input_timeout_ = 0.1, force_sign_ = -1.0;
+  double inbox_ = 0.0, outbox_ = 0.0, ext_ereq_ = 0.0;
+  ros::Time last_step_, last_trigger_;
+  bool stale_ = true;
+  bool require_measurement_ = true;
+  uint64_t received_ = 0, rejected_ = 0;
+};
+
+}  // namespace node
+}  // namespace saras_teleop
+
+#endif  // SARAS_TELEOP_TANK_NODE_H

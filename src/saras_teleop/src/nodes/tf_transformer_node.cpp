@@ -1,0 +1,250 @@
+/**
+ * tf_transformer: master pose/twist in the slave base frame, force command to the Touch frame
+ * (one instance per channel).
+ *
+ * Subscribes /tf and /tf_static itself (TCP_NODELAY, own tf2::BufferCore) so that each new master
+ * sample is processed the moment it arrives: lookup reference_frame <- tracked_frame at the latest
+ * time, publish master_pose (PoseStamped, stamp = TF sample time) and the low-pass filtered twist
+ * master_twist (TwistStamped, reference frame, differentiated over TF sample times).
+ * tank_wrench (WrenchStamped, reference frame) is rotated into device_base_frame (no lever arm: the
+ * force acts at the stylus), saturated to ~max_force and published as wrench_cmd at once.
+ * A ~rate timer republishes the command (zero if tank_wrench is older than ~wrench_timeout), waits
+ * for the frames at start-up (clear error after ~wait_timeout, keeps waiting) and declares the
+ * master STALE if no new sample arrived within ~stale_timeout (twist cleared).
+ * Params: reference_frame, tracked_frame, device_base_frame, rate [Hz], low_pass_cutoff [Hz],
+ * wait_timeout [s], stale_timeout [s], wrench_timeout [s], max_force [N], max_torque [N m].
+ */
+#include <string>
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include "node_common.h"
+#include "saras_teleop/twist_estimator.h"
+
+namespace saras_teleop
+{
+namespace node
+{
+class TfTransformerNode
+{
+public:
+  TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : buffer_(ros::Duration(5.0))
+    , est_(paramPositive(pnh, "low_pass_cutoff", 50.0), paramPositive(pnh, "max_gap", 0.1))
+    , status_(nh, "teleop/tf_transformer" + ros::this_node::getNamespace())
+  {
+    reference_ = paramString(pnh, "reference_frame", "mesa_left/sbs_world");
+    tracked_ = paramString(pnh, "tracked_frame", "touch_left/stylus");
+    device_base_ = paramString(pnh, "device_base_frame", "touch_left/base");
+    const double rate = paramPositive(pnh, "rate", 1000.0);
+    period_ = 1.0 / rate;
+    wait_timeout_ = paramPositive(pnh, "wait_timeout", 10.0);
+    stale_timeout_ = paramPositive(pnh, "stale_timeout", 0.05);
+    wrench_timeout_ = paramPositive(pnh, "wrench_timeout", 0.05);
+    max_force_ = paramPositive(pnh, "max_force", 3.3);
+    max_torque_ = paramPositive(pnh, "max_torque", 0.1);
+
+    pose_.header.frame_id = twist_.header.frame_id = reference_;
+    wrench_.header.frame_id = device_base_;
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("master_pose", 10);
+    twist_pub_ = nh.advertise<geometry_msgs::TwistStamped>("master_twist", 10);
+    wrench_pub_ = nh.advertise<geometry_msgs::WrenchStamped>("wrench_cmd", 10);
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    tf_sub_ = nh.subscribe("/tf", 100, &TfTransformerNode::onTf, this, fast);
+    tf_static_sub_ = nh.subscribe("/tf_static", 100, &TfTransformerNode::onTfStatic, this, fast);
+    wrench_sub_ = nh.subscribe("tank_wrench", 10, &TfTransformerNode::onWrench, this, fast);
+    start_ = ros::Time::now();
+    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TfTransformerNode::onTimer, this);
+  }
+
+private:
+  void insert(const tf2_msgs::TFMessage& m, bool is_static, bool& has_tracked)
+  {
+    for (const auto& t : m.transforms)
+    {
+      try
+      {
+        buffer_.setTransform(t, "tf_transformer", is_static);
+      }
+      catch (const std::exception& e)
+      {
+        ++rejected_;
+        ROS_ERROR_THROTTLE(1.0, "tf_transformer: rejected transform %s: %s", t.child_frame_id.c_str(), e.what());
+        continue;
+      }
+      if (t.child_frame_id == tracked_)
+        has_tracked = true;
+    }
+  }
+
+  void onTf(const tf2_msgs::TFMessage::ConstPtr& m)
+  {
+    bool has = false;
+    insert(*m, false, has);
+    if (has)
+      track();
+  }
+
+  void onTfStatic(const tf2_msgs::TFMessage::ConstPtr& m)
+  {
+    bool has = false;
+    insert(*m, true, has);
+    if (has)
+      track();
+  }
+
+  bool ready()
+  {
+    if (have_rotation_)
+      return true;
+    try
+    {
+      const geometry_msgs::TransformStamped t = buffer_.lookupTransform(device_base_, reference_, ros::Time(0));
+      const auto& q = t.transform.rotation;
+      R_dev_ref_ = KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w);
+      buffer_.lookupTransform(reference_, tracked_, ros::Time(0));
+      have_rotation_ = true;
+      ROS_INFO("tf_transformer: tracking %s in %s, commands in %s", tracked_.c_str(), reference_.c_str(),
+               device_base_.c_str());
+    }
+    catch (const tf2::TransformException&)
+    {
+      return false;
+    }
+    return true;
+  }
+
+  void track()
+  {
+    if (!ready())
+      return;
+    geometry_msgs::TransformStamped t;
+    try
+    {
+      t = buffer_.lookupTransform(reference_, tracked_, ros::Time(0));
+    }
+    catch (const tf2::TransformException& e)
+    {
+      ROS_ERROR_THROTTLE(1.0, "tf_transformer: %s", e.what());
+      return;
+    }
+    const auto& p = t.transform.translation;
+    const auto& q = t.transform.rotation;
+    const KDL::Frame f(KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w), KDL::Vector(p.x, p.y, p.z));
+    const TwistEstimator::Result r = est_.addSample(t.header.stamp.toSec(), f);
+    if (r == TwistEstimator::REJECTED)
+    {
+      ++rejected_;
+      ROS_ERROR_THROTTLE(1.0, "tf_transformer: non-finite master pose rejected (%lu so far)",
+                         static_cast<unsigned long>(rejected_));
+      return;
+    }
+    if (r == TwistEstimator::SAME_SAMPLE)
+      return;
+    ++received_;
+    last_sample_wall_ = ros::Time::now();
+    pose_.header.stamp = twist_.header.stamp = t.header.stamp;
+    pose_.pose.position.x = p.x;
+    pose_.pose.position.y = p.y;
+    pose_.pose.position.z = p.z;
+    pose_.pose.orientation = q;
+    fromVec(est_.twist(), twist_.twist);
+    pose_pub_.publish(pose_);
+    twist_pub_.publish(twist_);
+  }
+
+  void onWrench(const geometry_msgs::WrenchStamped::ConstPtr& m)
+  {
+    const Vector6d w = toVec(m->wrench);
+    if (!w.allFinite())
+    {
+      ++rejected_;
+      ROS_ERROR_THROTTLE(1.0, "tf_transformer: non-finite tank_wrench rejected, commanding zero force");
+      w_ref_.setZero();
+      return;
+    }
+    w_ref_ = w;
+    t_wrench_ = ros::Time::now();
+    publishWrench(m->header.stamp);
+  }
+
+  void publishWrench(const ros::Time& stamp)
+  {
+    if (!have_rotation_)
+      return;
+    Vector6d w = rotateWrench(R_dev_ref_, w_ref_);
+    const double nf = w.head<3>().norm(), nt = w.tail<3>().norm();
+    if (nf > max_force_)
+      w.head<3>() *= max_force_ / nf;
+    if (nt > max_torque_)
+      w.tail<3>() *= max_torque_ / nt;
+    wrench_.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    fromVec(w, wrench_.wrench);
+    wrench_pub_.publish(wrench_);
+    t_wrench_pub_ = ros::Time::now();
+  }
+
+  void onTimer(const ros::SteadyTimerEvent&)
+  {
+    const ros::Time now = ros::Time::now();
+    if (!ready())
+    {
+      if ((now - start_).toSec() > wait_timeout_)
+      {
+        ROS_ERROR_THROTTLE(wait_timeout_, "tf_transformer: frames %s -> %s -> %s not available after %.1f s "
+                                          "(is the touchball receiver running and world_frames published?)",
+                           device_base_.c_str(), reference_.c_str(), tracked_.c_str(), (now - start_).toSec());
+        status_.update(saras_msgs::ComponentStatus::ERROR, "waiting for TF " + tracked_ + " in " + reference_,
+                       (now - start_).toSec(), received_, rejected_);
+      }
+      return;
+    }
+    const double age = last_sample_wall_.isZero() ? 1e9 : (now - last_sample_wall_).toSec();
+    const bool stale = age > stale_timeout_;
+    if (stale && est_.twist().norm() > 0.0)
+    {
+      est_.clear();
+      fromVec(est_.twist(), twist_.twist);
+      twist_.header.stamp = now;
+      twist_pub_.publish(twist_);
+    }
+    if (t_wrench_.isZero() || (now - t_wrench_).toSec() > wrench_timeout_)
+      w_ref_.setZero();  // no fresh command: no force
+    if (t_wrench_pub_.isZero() || (now - t_wrench_pub_).toSec() > 1.5 * period_)
+      publishWrench(ros::Time());
+    status_.update(stale ? saras_msgs::ComponentStatus::STALE : saras_msgs::ComponentStatus::OK,
+                   stale ? "no new master sample on TF " + tracked_ : "tracking", std::min(age, 1e6), received_,
+                   rejected_);
+  }
+
+  tf2::BufferCore buffer_;
+  TwistEstimator est_;
+  StatusReporter status_;
+  std::string reference_, tracked_, device_base_;
+  double period_ = 0.001, wait_timeout_ = 10.0, stale_timeout_ = 0.05, wrench_timeout_ = 0.05;
+  double max_force_ = 3.3, max_torque_ = 0.1;
+  bool have_rotation_ = false;
+  KDL::Rotation R_dev_ref_;
+  Vector6d w_ref_ = Vector6d::Zero();
+  geometry_msgs::PoseStamped pose_;
+  geometry_msgs::TwistStamped twist_;
+  geometry_msgs::WrenchStamped wrench_;
+  ros::Publisher pose_pub_, twist_pub_, wrench_pub_;
+  ros::Subscriber tf_sub_, tf_static_sub_, wrench_sub_;
+  ros::SteadyTimer timer_;
+  ros::Time start_, last_sample_wall_, t_wrench_, t_wrench_pub_;
+  uint64_t received_ = 0, rejected_ = 0;
+};
+
+}  // namespace node
+}  // namespace saras_teleop
+
+int main(int argc, char** argv)
+{
+  return saras_teleop::node::runNode<saras_teleop::node::TfTransformerNode>(argc, argv, "tf_transformer");
+}

@@ -1,0 +1,215 @@
+/**
+ * transparency: transparency layer for every channel in ~channels (one instance).
+ *
+ * Per channel c (relative names): sub c/master_pose (PoseStamped, slave base frame), c/master_twist
+ * (TwistStamped), c/slave_pose (PoseStamped, measured slave pose), c/device_state
+ * (saras_msgs/HapticDeviceState: clutch, stale), c/fixture_wrench (WrenchStamped, optional virtual
+ * fixture in the slave base frame); sub link_status (saras_msgs/ComponentStatus, STALE => hold);
+ * pub c/des_wrench (WrenchStamped), c/des_twist (TwistStamped), both in mesa_<c>/sbs_world.
+ * Computes a channel when its master twist arrives (event-driven, stamps propagated) and on a
+ * ~rate timer if that input stops (then it holds: stale master => zero set-points).
+ * Params: pose_error_gain [N/m], scale_factor, rotation_scale, max_force [N], rate [Hz],
+ * input_timeout [s] (master/slave inputs older than this => hold), fixture_timeout [s].
+ */
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <saras_msgs/ComponentStatus.h>
+#include <saras_msgs/HapticDeviceState.h>
+
+#include "node_common.h"
+#include "saras_teleop/transparency.h"
+
+namespace saras_teleop
+{
+namespace node
+{
+class TransparencyNode
+{
+public:
+  TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : status_(nh, "teleop/transparency")
+  {
+    TransparencyParams p;
+    p.pose_error_gain = paramDouble(pnh, "pose_error_gain", p.pose_error_gain);
+    p.scale_factor = paramDouble(pnh, "scale_factor", p.scale_factor);
+    p.rotation_scale = paramDouble(pnh, "rotation_scale", p.rotation_scale);
+    p.max_force = paramDouble(pnh, "max_force", p.max_force);
+    p.validate();
+    const double rate = paramPositive(pnh, "rate", 1000.0);
+    period_ = 1.0 / rate;
+    input_timeout_ = paramPositive(pnh, "input_timeout", 0.1);
+    fixture_timeout_ = paramPositive(pnh, "fixture_timeout", 0.2);
+    const std::vector<std::string> channels = paramChannels(pnh);
+
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    ch_.resize(channels.size());
+    for (std::size_t i = 0; i < channels.size(); ++i)
+    {
+      Channel& c = ch_[i];
+      const std::string& n = channels[i];
+      c.name = n;
+      c.core.reset(new TransparencyChannel(p));
+      c.wrench.header.frame_id = c.twist.header.frame_id = "mesa_" + n + "/sbs_world";
+      c.pub_wrench = nh.advertise<geometry_msgs::WrenchStamped>(n + "/des_wrench", 10);
+      c.pub_twist = nh.advertise<geometry_msgs::TwistStamped>(n + "/des_twist", 10);
+      c.subs.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
+          n + "/master_pose", 10, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onMasterPose(i, *m); },
+          ros::VoidConstPtr(), fast));
+      c.subs.push_back(nh.subscribe<geometry_msgs::TwistStamped>(
+          n + "/master_twist", 10,
+          [this, i](const geometry_msgs::TwistStamped::ConstPtr& m) { onMasterTwist(i, *m); }, ros::VoidConstPtr(),
+          fast));
+      c.subs.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
+          n + "/slave_pose", 10, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onSlavePose(i, *m); },
+          ros::VoidConstPtr(), fast));
+      c.subs.push_back(nh.subscribe<saras_msgs::HapticDeviceState>(
+          n + "/device_state", 10,
+          [this, i](const saras_msgs::HapticDeviceState::ConstPtr& m) {
+            ch_[i].clutch = m->clutch;
+            ch_[i].device_stale = m->stale;
+          },
+          ros::VoidConstPtr(), fast));
+      c.subs.push_back(nh.subscribe<geometry_msgs::WrenchStamped>(
+          n + "/fixture_wrench", 10,
+          [this, i](const geometry_msgs::WrenchStamped::ConstPtr& m) { onFixture(i, *m); }, ros::VoidConstPtr(),
+          fast));
+    }
+    link_sub_ = nh.subscribe("link_status", 10, &TransparencyNode::onLinkStatus, this, fast);
+    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TransparencyNode::onTimer, this);
+  }
+
+private:
+  struct Channel
+  {
+    std::string name;
+    std::unique_ptr<TransparencyChannel> core;
+    std::vector<ros::Subscriber> subs;
+    ros::Publisher pub_wrench, pub_twist;
+    geometry_msgs::WrenchStamped wrench;
+    geometry_msgs::TwistStamped twist;
+    ros::Time t_master, t_slave, t_fixture, t_last;
+    bool clutch = false, device_stale = false;
+    TransparencyChannel::State state = TransparencyChannel::WAITING;
+  };
+
+  void bad(const std::string& what)
+  {
+    ++rejected_;
+    ROS_ERROR_THROTTLE(1.0, "transparency: rejected %s (non-finite); %lu rejected so far", what.c_str(),
+                       static_cast<unsigned long>(rejected_));
+  }
+
+  void onMasterPose(std::size_t i, const geometry_msgs::PoseStamped& m)
+  {
+    const Eigen::Vector3d p(m.pose.position.x, m.pose.position.y, m.pose.position.z);
+    if (!ch_[i].core->setMasterPosition(p))
+      return bad(ch_[i].name + "/master_pose");
+    ++received_;
+    ch_[i].t_master = ros::Time::now();
+  }
+
+  void onMasterTwist(std::size_t i, const geometry_msgs::TwistStamped& m)
+  {
+    if (!ch_[i].core->setMasterTwist(toVec(m.twist)))
+      return bad(ch_[i].name + "/master_twist");
+    ++received_;
+    compute(i, m.header.stamp);
+  }
+
+  void onSlavePose(std::size_t i, const geometry_msgs::PoseStamped& m)
+  {
+    const Eigen::Vector3d p(m.pose.position.x, m.pose.position.y, m.pose.position.z);
+    if (!ch_[i].core->setSlavePosition(p))
+      return bad(ch_[i].name + "/slave_pose");
+    ++received_;
+    ch_[i].t_slave = ros::Time::now();
+  }
+
+  void onFixture(std::size_t i, const geometry_msgs::WrenchStamped& m)
+  {
+    if (!ch_[i].core->setFixtureWrench(toVec(m.wrench)))
+      return bad(ch_[i].name + "/fixture_wrench");
+    ch_[i].t_fixture = ros::Time::now();
+  }
+
+  void onLinkStatus(const saras_msgs::ComponentStatus::ConstPtr& m)
+  {
+    link_ok_ = m->level != saras_msgs::ComponentStatus::STALE;
+  }
+
+  void compute(std::size_t i, const ros::Time& stamp)
+  {
+    Channel& c = ch_[i];
+    const ros::Time now = ros::Time::now();
+    const bool fresh = !c.t_master.isZero() && !c.t_slave.isZero() &&
+                       (now - c.t_master).toSec() <= input_timeout_ && (now - c.t_slave).toSec() <= input_timeout_;
+    if (!c.t_fixture.isZero() && (now - c.t_fixture).toSec() > fixture_timeout_)
+    {
+      c.core->setFixtureWrench(Vector6d::Zero());
+      c.t_fixture = ros::Time();
+    }
+    c.core->setClutch(c.clutch);
+    c.core->setLinkOk(link_ok_ && !c.device_stale && (fresh || c.state == TransparencyChannel::WAITING));
+    Vector6d w, v;
+    c.state = c.core->update(w, v);
+    const ros::Time st = stamp.isZero() ? now : stamp;
+    c.wrench.header.stamp = st;
+    c.twist.header.stamp = st;
+    fromVec(w, c.wrench.wrench);
+    fromVec(v, c.twist.twist);
+    if (c.state != TransparencyChannel::WAITING)
+    {
+      c.pub_twist.publish(c.twist);
+      c.pub_wrench.publish(c.wrench);
+    }
+    c.t_last = now;
+  }
+
+  void onTimer(const ros::SteadyTimerEvent&)
+  {
+    const ros::Time now = ros::Time::now();
+    std::string msg;
+    uint8_t level = saras_msgs::ComponentStatus::OK;
+    double age = 0.0;
+    for (std::size_t i = 0; i < ch_.size(); ++i)
+    {
+      Channel& c = ch_[i];
+      if (c.t_last.isZero() || (now - c.t_last).toSec() > 1.5 * period_)
+        compute(i, ros::Time());  // master twist stopped: hold (fresh == false) or keep waiting
+      if (!c.t_master.isZero())
+        age = std::max(age, (now - c.t_master).toSec());
+      if (c.state == TransparencyChannel::WAITING)
+      {
+        level = std::max<uint8_t>(level, saras_msgs::ComponentStatus::WARN);
+        msg += c.name + ": waiting for master and slave poses; ";
+      }
+      else if (c.state == TransparencyChannel::HOLD)
+      {
+        if (!c.clutch)
+          level = std::max<uint8_t>(level, saras_msgs::ComponentStatus::STALE);
+        msg += c.name + (c.clutch ? ": clutch; " : ": holding (link stale or inputs old); ");
+      }
+    }
+    status_.update(level, msg.empty() ? "running" : msg, age, received_, rejected_);
+  }
+
+  std::vector<Channel> ch_;
+  ros::Subscriber link_sub_;
+  ros::SteadyTimer timer_;
+  StatusReporter status_;
+  double period_ = 0.001, input_timeout_ = 0.1, fixture_timeout_ = 0.2;
+  bool link_ok_ = true;
+  uint64_t received_ = 0, rejected_ = 0;
+};
+
+}  // namespace node
+}  // namespace saras_teleop
+
+int main(int argc, char** argv)
+{
+  return saras_teleop::node::runNode<saras_teleop::node::TransparencyNode>(argc, argv, "transparency");
+}

@@ -1,0 +1,195 @@
+/**
+ * velocity_integrator: slave pose set-point from the implemented slave twist (one per channel).
+ *
+ * Waits for the slave start pose on start_pose (PoseStamped; error after ~start_timeout, keeps
+ * waiting without publishing), then integrates tank_twist (TwistStamped, slave base frame) with
+ * KDL::addDelta: each new twist first closes the previous interval with the previous twist (zero-order
+ * hold), then the set-point is published at once on target_pose (PoseStamped in ~frame_id, stamp of
+ * the twist) and every ~tf_decimation-th time as TF ~frame_id -> ~setpoint_frame. A ~rate timer keeps
+ * publishing if twists stop. Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
+ * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
+ * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
+ */
+#include <string>
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <saras_msgs/ComponentStatus.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "node_common.h"
+#include "saras_teleop/velocity_integrator.h"
+
+namespace saras_teleop
+{
+namespace node
+{
+namespace
+{
+IntegratorParams readParams(const ros::NodeHandle& pnh)
+{
+  IntegratorParams p;
+  p.max_linear_velocity = paramDouble(pnh, "max_linear_velocity", p.max_linear_velocity);
+  p.max_angular_velocity = paramDouble(pnh, "max_angular_velocity", p.max_angular_velocity);
+  p.workspace_min = paramVector(pnh, "workspace_min", p.workspace_min);
+  p.workspace_max = paramVector(pnh, "workspace_max", p.workspace_max);
+  p.validate();
+  return p;
+}
+}  // namespace
+
+class VelocityIntegratorNode
+{
+public:
+  VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : vi_(readParams(pnh)), status_(nh, "teleop/velocity_integrator" + ros::this_node::getNamespace())
+  {
+    const double rate = paramPositive(pnh, "rate", 1000.0);
+    period_ = 1.0 / rate;
+    start_timeout_ = paramPositive(pnh, "start_timeout", 10.0);
+    input_timeout_ = paramPositive(pnh, "input_timeout", 0.05);
+    frame_ = paramString(pnh, "frame_id", "mesa_left/sbs_world");
+    tf_.header.frame_id = pose_.header.frame_id = frame_;
+    tf_.child_frame_id = paramString(pnh, "setpoint_frame", "mesa_left/setpoint");
+    int dec = 10;
+    pnh.param("tf_decimation", dec, 10);
+    if (dec < 1)
+      throw std::invalid_argument("parameter '" + pnh.resolveName("tf_decimation") + "' must be >= 1");
+    tf_decimation_ = static_cast<unsigned>(dec);
+
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", 10);
+    start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
+    twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
+    link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
+    t0_ = ros::Time::now();
+    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &VelocityIntegratorNode::onTimer, this);
+  }
+
+private:
+  void onStart(const geometry_msgs::PoseStamped::ConstPtr& m)
+  {
+    const auto& p = m->pose.position;
+    const auto& q = m->pose.orientation;
+    const double qn = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+    if (!(std::isfinite(qn) && std::fabs(qn - 1.0) < 1e-3) ||
+        !vi_.start(KDL::Frame(KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w), KDL::Vector(p.x, p.y, p.z))))
+    {
+      ++rejected_;
+      ROS_ERROR_THROTTLE(1.0, "velocity_integrator: invalid start pose rejected (non-finite or non-unit quaternion)");
+      return;
+    }
+    start_sub_.shutdown();
+    t_last_ = ros::Time::now();
+    ROS_INFO("velocity_integrator: start pose received, integrating in %s", frame_.c_str());
+  }
+
+  void onLink(const saras_msgs::ComponentStatus::ConstPtr& m)
+  {
+    link_ok_ = m->level != saras_msgs::ComponentStatus::STALE;
+  }
+
+  void onTwist(const geometry_msgs::TwistStamped::ConstPtr& m)
+  {
+    const Vector6d v = toVec(m->twist);
+    if (!v.allFinite())
+    {
+      ++rejected_;
+      ROS_ERROR_THROTTLE(1.0, "velocity_integrator: non-finite twist rejected, holding");
+      twist_.setZero();
+      return;
+    }
+    ++received_;
+    const ros::Time now = ros::Time::now();
+    advance(now);
+    twist_ = v;
+    t_twist_ = now;
+    publish(m->header.stamp);
+  }
+
+  /// Close the interval since the last step with the held twist.
+  void advance(const ros::Time& now)
+  {
+    if (!vi_.started())
+      return;
+    const bool fresh = !t_twist_.isZero() && (now - t_twist_).toSec() <= input_timeout_;
+    hold_ = !link_ok_ || !fresh;
+    vi_.step(twist_, (now - t_last_).toSec(), hold_);
+    t_last_ = now;
+  }
+
+  void publish(const ros::Time& stamp)
+  {
+    if (!vi_.started())
+      return;
+    const KDL::Frame& f = vi_.pose();
+    pose_.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    pose_.pose.position.x = f.p.x();
+    pose_.pose.position.y = f.p.y();
+    pose_.pose.position.z = f.p.z();
+    f.M.GetQuaternion(pose_.pose.orientation.x, pose_.pose.orientation.y, pose_.pose.orientation.z,
+                      pose_.pose.orientation.w);
+    pose_pub_.publish(pose_);
+    t_pub_ = ros::Time::now();
+    if (++count_ % tf_decimation_ == 0)
+    {
+      tf_.header.stamp = pose_.header.stamp;
+      tf_.transform.translation.x = f.p.x();
+      tf_.transform.translation.y = f.p.y();
+      tf_.transform.translation.z = f.p.z();
+      tf_.transform.rotation = pose_.pose.orientation;
+      broadcaster_.sendTransform(tf_);
+    }
+  }
+
+  void onTimer(const ros::SteadyTimerEvent&)
+  {
+    const ros::Time now = ros::Time::now();
+    if (!vi_.started())
+    {
+      const double waited = (now - t0_).toSec();
+      if (waited > start_timeout_)
+      {
+        ROS_ERROR_THROTTLE(start_timeout_, "velocity_integrator: no slave start pose on %s after %.1f s; not commanding",
+                           start_sub_.getTopic().c_str(), waited);
+        status_.update(saras_msgs::ComponentStatus::ERROR, "no slave start pose", waited, received_, rejected_);
+      }
+      return;
+    }
+    if (t_pub_.isZero() || (now - t_pub_).toSec() > 1.5 * period_)
+    {
+      advance(now);
+      publish(ros::Time());
+    }
+    const double age = t_twist_.isZero() ? 1e6 : (now - t_twist_).toSec();
+    status_.update(hold_ ? saras_msgs::ComponentStatus::STALE : saras_msgs::ComponentStatus::OK,
+                   hold_ ? "holding: master link stale or no twist" : "integrating", std::min(age, 1e6),
+                   received_, rejected_);
+  }
+
+  VelocityIntegrator vi_;
+  StatusReporter status_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+  double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05;
+  std::string frame_;
+  unsigned tf_decimation_ = 10;
+  unsigned long count_ = 0;
+  Vector6d twist_ = Vector6d::Zero();
+  bool link_ok_ = true, hold_ = true;
+  geometry_msgs::PoseStamped pose_;
+  geometry_msgs::TransformStamped tf_;
+  ros::Publisher pose_pub_;
+  ros::Subscriber start_sub_, twist_sub_, link_sub_;
+  ros::SteadyTimer timer_;
+  ros::Time t0_, t_last_, t_twist_, t_pub_;
+  uint64_t received_ = 0, rejected_ = 0;
+};
+
+}  // namespace node
+}  // namespace saras_teleop
+
+int main(int argc, char** argv)
+{
+  return saras_teleop::node::runNode<saras_teleop::node::VelocityIntegratorNode>(argc, argv, "velocity_integrator");
+}

@@ -1,0 +1,305 @@
+// Benchmark driver for saras_visual_feedback (run through bench/run; not a test).
+//
+//   visual_feedback_bench core [iterations]
+//       Per-frame cost of the core (input copy + projection + drawing) at 1280x720 and 1920x1080,
+//       stereo (both eyes), no ROS.
+//   visual_feedback_bench pipeline <seconds> <rate_hz> <width> <height>
+//       Loads the VisualFeedback nodelet in this process (as in a shared nodelet manager, zero
+//       copy), publishes a simulated stereo endoscope at <rate_hz>, counts frames in and out and
+//       the latency from the image stamp to the augmented image's arrival. Needs a ROS master.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nodelet/loader.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <std_msgs/Float64MultiArray.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
+#include "saras_visual_feedback/overlay.h"
+
+using namespace saras_visual_feedback;  // NOLINT(build/namespaces) benchmark driver
+
+namespace
+{
+CameraIntrinsics intrinsics(int w, int h)
+{
+  CameraIntrinsics k;
+  k.width = w;
+  k.height = h;
+  k.fx = k.fy = 0.82 * w;
+  k.cx = 0.5 * w + 3.1;
+  k.cy = 0.5 * h - 2.7;
+  k.model = DistortionModel::kPlumbBob;
+  k.d = {-0.28, 0.11, 0.0012, -0.0007, -0.021, 0, 0, 0};
+  return k;
+}
+
+struct Stats
+{
+  std::vector<double> v;
+  double mean() const
+  {
+    double s = 0;
+    for (double x : v)
+      s += x;
+    return v.empty() ? 0.0 : s / v.size();
+  }
+  double pct(double p)
+  {
+    if (v.empty())
+      return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5))];
+  }
+};
+
+int runCore(int iterations)
+{
+  std::printf("%-10s %-8s %10s %10s %10s %10s\n", "image", "unit", "mean_ms", "p50_ms", "p99_ms", "max_ms");
+  const int sizes[2][2] = {{1280, 720}, {1920, 1080}};
+  for (const auto& sz : sizes)
+  {
+    CameraModel eye[2];
+    eye[0].configure(intrinsics(sz[0], sz[1]), nullptr);
+    eye[1].configure(intrinsics(sz[0], sz[1]), nullptr);
+    cv::Mat input(sz[1], sz[0], CV_8UC3);
+    cv::randu(input, 0, 255);
+    OverlayStyle style;
+    ToolOverlay tools[4];
+    const char* labels[4] = {"mesa_left", "mesa_right", "PSM1", "PSM2"};
+    Stats per_eye, per_pair;
+    for (int it = 0; it < iterations; ++it)
+    {
+      const double phase = 0.05 * it;
+      for (int i = 0; i < 4; ++i)
+      {
+        tools[i].label = labels[i];
+        tools[i].visible = true;
+        tools[i].tip = cv::Point3d(-0.03 + 0.02 * i + 0.005 * std::sin(phase), 0.01 * std::cos(phase + i), 0.1);
+        tools[i].has_shaft = true;
+        tools[i].shaft = tools[i].tip + cv::Point3d(0.02, -0.03, 0.035);
+        tools[i].distance = 0.001 + 0.01 * i;
+      }
+      tools[3].tip.x = 0.4;  // one out of view: border marker
+      const auto p0 = std::chrono::steady_clock::now();
+      for (int e = 0; e < 2; ++e)
+      {
+        const auto t0 = std::chrono::steady_clock::now();
+        cv::Mat out = input.clone();  // what the nodelet does: copy the shared input
+        drawOverlay(out, ChannelOrder::kBgr, eye[e], style, tools, 4, nullptr);
+        per_eye.v.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      }
+      per_pair.v.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - p0).count());
+    }
+    char name[32];
+    std::snprintf(name, sizeof(name), "%dx%d", sz[0], sz[1]);
+    std::printf("%-10s %-8s %10.3f %10.3f %10.3f %10.3f\n", name, "frame", per_eye.mean(), per_eye.pct(0.5),
+                per_eye.pct(0.99), per_eye.pct(1.0));
+    std::printf("%-10s %-8s %10.3f %10.3f %10.3f %10.3f\n", name, "stereo", per_pair.mean(), per_pair.pct(0.5),
+                per_pair.pct(0.99), per_pair.pct(1.0));
+  }
+  return 0;
+}
+
+class Pipeline
+{
+public:
+  Pipeline(int w, int h) : w_(w), h_(h)
+  {
+    ros::NodeHandle nh;
+    for (int e = 0; e < 2; ++e)
+    {
+      const std::string eye = e == 0 ? "left" : "right";
+      image_pub_[e] = nh.advertise<sensor_msgs::Image>("/endoscope/" + eye + "/image_raw", 2);
+      info_pub_[e] = nh.advertise<sensor_msgs::CameraInfo>("/endoscope/" + eye + "/camera_info", 2);
+      out_sub_[e] = nh.subscribe<sensor_msgs::Image>("/visual_feedback/" + eye + "/image", 10,
+                                                     [this, e](const sensor_msgs::ImageConstPtr& m) { onOut(m, e); });
+      const CameraIntrinsics k = intrinsics(w, h);
+      info_[e].header.frame_id = "endoscope/" + eye + "_optical_frame";
+      info_[e].width = w;
+      info_[e].height = h;
+      info_[e].distortion_model = "plumb_bob";
+      info_[e].D.assign(k.d.begin(), k.d.begin() + 5);
+      info_[e].K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
+      info_[e].R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+      info_[e].P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
+    }
+    pose_pub_[0] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_left/ee_pose", 1);
+    pose_pub_[1] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_right/ee_pose", 1);
+    dist_pub_ = nh.advertise<std_msgs::Float64MultiArray>("/collision/distances", 1);
+    // Tools' frames 10 cm in front of the cameras.
+    std::vector<geometry_msgs::TransformStamped> tfs;
+    const char* parents[4] = {"endoscope/left_optical_frame", "endoscope/left_optical_frame",
+                              "endoscope/left_optical_frame", "endoscope/left_optical_frame"};
+    const char* children[4] = {"bench/tools", "mesa_left/rcm", "mesa_right/rcm", "endoscope/right_optical_frame"};
+    const double xyz[4][3] = {{0, 0, 0.1}, {-0.03, -0.04, 0.06}, {0.03, -0.04, 0.06}, {0.005, 0, 0}};
+    for (int i = 0; i < 4; ++i)
+    {
+      geometry_msgs::TransformStamped t;
+      t.header.frame_id = parents[i];
+      t.child_frame_id = children[i];
+      t.transform.translation.x = xyz[i][0];
+      t.transform.translation.y = xyz[i][1];
+      t.transform.translation.z = xyz[i][2];
+      t.transform.rotation.w = 1.0;
+      tfs.push_back(t);
+    }
+    static_tf_.sendTransform(tfs);
+  }
+
+  void onOut(const sensor_msgs::ImageConstPtr& m, int e)
+  {
+    const double latency_ms = (ros::Time::now() - m->header.stamp).toSec() * 1e3;
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++out_[e];
+    latency_.v.push_back(latency_ms);
+  }
+
+  void publishAuxiliary(double t)
+  {
+    for (int s = 0; s < 2; ++s)
+    {
+      geometry_msgs::PoseStamped p;
+      p.header.stamp = ros::Time::now();
+      p.header.frame_id = "bench/tools";
+      p.pose.position.x = (s == 0 ? -0.02 : 0.02) + 0.01 * std::sin(t);
+      p.pose.position.y = 0.005 * std::cos(t);
+      p.pose.orientation.w = 1.0;
+      pose_pub_[s].publish(p);
+    }
+    std_msgs::Float64MultiArray d;
+    d.data = {0.015 + 0.015 * std::sin(t), 0.015 + 0.015 * std::cos(t), 0.05, 0.05};
+    dist_pub_.publish(d);
+  }
+
+  void publishFrame()
+  {
+    const ros::Time stamp = ros::Time::now();
+    for (int e = 0; e < 2; ++e)
+    {
+      sensor_msgs::ImagePtr img(new sensor_msgs::Image);  // a camera driver allocates each frame
+      img->header.stamp = stamp;
+      img->header.frame_id = info_[e].header.frame_id;
+      img->width = w_;
+      img->height = h_;
+      img->encoding = "bgr8";
+      img->step = 3 * w_;
+      img->data.assign(static_cast<std::size_t>(img->step) * h_, static_cast<std::uint8_t>(40 + 20 * e));
+      sensor_msgs::CameraInfoPtr info(new sensor_msgs::CameraInfo(info_[e]));
+      info->header.stamp = stamp;
+      info_pub_[e].publish(info);
+      image_pub_[e].publish(img);
+      ++in_[e];
+    }
+  }
+
+  bool subscribed() const
+  {
+    return image_pub_[0].getNumSubscribers() > 0 && image_pub_[1].getNumSubscribers() > 0 &&
+           out_sub_[0].getNumPublishers() > 0 && out_sub_[1].getNumPublishers() > 0;
+  }
+
+  void report(double seconds, double rate)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::printf("%-10s %6s %6s %8s %8s %8s %8s %12s %12s %12s\n", "image", "rate", "secs", "in_L", "out_L", "in_R",
+                "out_R", "lat_mean_ms", "lat_p99_ms", "lat_max_ms");
+    char name[32];
+    std::snprintf(name, sizeof(name), "%dx%d", w_, h_);
+    std::printf("%-10s %6.1f %6.1f %8llu %8llu %8llu %8llu %12.3f %12.3f %12.3f\n", name, rate, seconds,
+                static_cast<unsigned long long>(in_[0]), static_cast<unsigned long long>(out_[0]),
+                static_cast<unsigned long long>(in_[1]), static_cast<unsigned long long>(out_[1]), latency_.mean(),
+                latency_.pct(0.99), latency_.pct(1.0));
+    std::printf("drops: left %lld, right %lld\n", static_cast<long long>(in_[0]) - static_cast<long long>(out_[0]),
+                static_cast<long long>(in_[1]) - static_cast<long long>(out_[1]));
+  }
+
+  std::uint64_t drops() const
+  {
+    return (in_[0] - out_[0]) + (in_[1] - out_[1]);
+  }
+
+private:
+  int w_, h_;
+  ros::Publisher image_pub_[2], info_pub_[2], pose_pub_[2], dist_pub_;
+  ros::Subscriber out_sub_[2];
+  sensor_msgs::CameraInfo info_[2];
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  std::mutex mutex_;
+  std::uint64_t in_[2] = {0, 0}, out_[2] = {0, 0};
+  Stats latency_;
+};
+
+int runPipeline(int argc, char** argv)
+{
+  const double seconds = argc > 2 ? std::atof(argv[2]) : 60.0;
+  const double rate = argc > 3 ? std::atof(argv[3]) : 60.0;
+  const int w = argc > 4 ? std::atoi(argv[4]) : 1920;
+  const int h = argc > 5 ? std::atoi(argv[5]) : 1080;
+  ros::init(argc, argv, "visual_feedback_bench", ros::init_options::AnonymousName);
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  Pipeline pipe(w, h);
+  nodelet::Loader loader(false);
+  nodelet::M_string remap;
+  remap["/left/image_raw"] = "/endoscope/left/image_raw";
+  remap["/right/image_raw"] = "/endoscope/right/image_raw";
+  remap["/left/camera_info"] = "/endoscope/left/camera_info";
+  remap["/right/camera_info"] = "/endoscope/right/camera_info";
+  remap["/left/image"] = "/visual_feedback/left/image";
+  remap["/right/image"] = "/visual_feedback/right/image";
+  remap["/distances"] = "/collision/distances";
+  if (!loader.load("/bench_vf", "saras_visual_feedback/VisualFeedback", remap, nodelet::V_string()))
+  {
+    std::fprintf(stderr, "cannot load the VisualFeedback nodelet\n");
+    return 1;
+  }
+  const ros::WallTime wait_until = ros::WallTime::now() + ros::WallDuration(10.0);
+  while (!pipe.subscribed() && ros::WallTime::now() < wait_until)
+    ros::WallDuration(0.05).sleep();
+  if (!pipe.subscribed())
+  {
+    std::fprintf(stderr, "the nodelet did not connect within 10 s\n");
+    return 1;
+  }
+  ros::WallDuration(0.5).sleep();
+  ros::WallRate r(rate);
+  const ros::WallTime start = ros::WallTime::now();
+  int k = 0;
+  while ((ros::WallTime::now() - start).toSec() < seconds && ros::ok())
+  {
+    if (k % 4 == 0)
+      pipe.publishAuxiliary(0.02 * k);
+    pipe.publishFrame();
+    ++k;
+    r.sleep();
+  }
+  ros::WallDuration(0.5).sleep();  // let the last frames arrive
+  pipe.report((ros::WallTime::now() - start).toSec() - 0.5, rate);
+  spinner.stop();
+  loader.clear();
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  const std::string mode = argc > 1 ? argv[1] : "core";
+  if (mode == "core")
+    return runCore(argc > 2 ? std::atoi(argv[2]) : 300);
+  if (mode == "pipeline")
+    return runPipeline(argc, argv);
+  std::fprintf(stderr, "usage: %s core [iterations] | pipeline <seconds> <rate_hz> <width> <height>\n", argv[0]);
+  return 2;
+}

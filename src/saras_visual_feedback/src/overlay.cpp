@@ -1,0 +1,239 @@
+#include "saras_visual_feedback/overlay.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+
+namespace saras_visual_feedback
+{
+namespace
+{
+cv::Scalar toScalar(const Rgb& c, ChannelOrder order)
+{
+  return order == ChannelOrder::kBgr ? cv::Scalar(c.b, c.g, c.r, 255) : cv::Scalar(c.r, c.g, c.b, 255);
+}
+
+int hexValue(char c)
+{
+  if (c >= '0' && c <= '9')
+    return c - '0';
+  if (c >= 'a' && c <= 'f')
+    return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F')
+    return c - 'A' + 10;
+  return -1;
+}
+
+cv::Point toFixedPoint(const cv::Point2d& p, int shift)
+{
+  const double s = static_cast<double>(1 << shift);
+  return cv::Point(static_cast<int>(std::lround(p.x * s)), static_cast<int>(std::lround(p.y * s)));
+}
+
+/// Pixel coordinates far outside the image are clamped so that the int conversion cannot overflow.
+cv::Point2d clampForDrawing(const cv::Point2d& p, const CameraIntrinsics& k)
+{
+  const double margin = 4.0 * std::max(k.width, k.height);
+  return {std::min(std::max(p.x, -margin), k.width + margin), std::min(std::max(p.y, -margin), k.height + margin)};
+}
+
+constexpr int kShift = 4;  // sub-pixel bits for cv::line / cv::circle
+}  // namespace
+
+bool parseColour(const std::string& text, Rgb* colour)
+{
+  std::size_t start = (!text.empty() && text[0] == '#') ? 1 : 0;
+  if (text.size() != start + 6)
+    return false;
+  int v[6];
+  for (int i = 0; i < 6; ++i)
+  {
+    v[i] = hexValue(text[start + i]);
+    if (v[i] < 0)
+      return false;
+  }
+  colour->r = static_cast<std::uint8_t>(v[0] * 16 + v[1]);
+  colour->g = static_cast<std::uint8_t>(v[2] * 16 + v[3]);
+  colour->b = static_cast<std::uint8_t>(v[4] * 16 + v[5]);
+  return true;
+}
+
+bool validateStyle(const OverlayStyle& s, std::string* error)
+{
+  auto fail = [error](const std::string& why) {
+    if (error)
+      *error = why;
+    return false;
+  };
+  if (!(std::isfinite(s.collision_threshold) && s.collision_threshold >= 0.0))
+    return fail("collision_threshold must be finite and >= 0 [m]");
+  if (!(std::isfinite(s.warning_threshold) && s.warning_threshold > s.collision_threshold))
+    return fail("warning_threshold must be finite and > collision_threshold [m]");
+  if (s.line_thickness < 1 || s.line_thickness > 50)
+    return fail("line_thickness must be in [1, 50] px");
+  if (s.circle_radius < 1 || s.circle_radius > 100)
+    return fail("circle_radius must be in [1, 100] px");
+  if (s.marker_size < 4 || s.marker_size > 200)
+    return fail("marker_size must be in [4, 200] px");
+  if (s.shaft_segments < 1 || s.shaft_segments > 64)
+    return fail("shaft_segments must be in [1, 64]");
+  return true;
+}
+
+Proximity classify(double distance, const OverlayStyle& style)
+{
+  if (std::isnan(distance))
+    return Proximity::kUnknown;
+  if (distance <= style.collision_threshold)
+    return Proximity::kCollision;
+  if (distance < style.warning_threshold)
+    return Proximity::kWarning;
+  return Proximity::kSafe;
+}
+
+Rgb colourOf(Proximity p, const OverlayStyle& style)
+{
+  switch (p)
+  {
+    case Proximity::kCollision:
+      return style.collision_colour;
+    case Proximity::kWarning:
+      return style.warning_colour;
+    case Proximity::kSafe:
+      return style.safe_colour;
+    case Proximity::kUnknown:
+    default:
+      return style.unknown_colour;
+  }
+}
+
+cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k, double inset)
+{
+  const double xmin = inset, ymin = inset;
+  const double xmax = std::max(xmin, k.width - 1.0 - inset), ymax = std::max(ymin, k.height - 1.0 - inset);
+  const cv::Point2d o(std::min(std::max(k.cx, xmin), xmax), std::min(std::max(k.cy, ymin), ymax));
+  cv::Point2d d = direction;
+  const double n = std::hypot(d.x, d.y);
+  if (!(n > 1e-12) || !std::isfinite(n))
+    d = cv::Point2d(0.0, 1.0);  // no direction: bottom edge
+  else
+    d *= 1.0 / n;
+  double t = std::numeric_limits<double>::infinity();
+  if (d.x > 1e-12)
+    t = std::min(t, (xmax - o.x) / d.x);
+  if (d.x < -1e-12)
+    t = std::min(t, (xmin - o.x) / d.x);
+  if (d.y > 1e-12)
+    t = std::min(t, (ymax - o.y) / d.y);
+  if (d.y < -1e-12)
+    t = std::min(t, (ymin - o.y) / d.y);
+  if (!std::isfinite(t))
+    t = 0.0;
+  return {std::min(std::max(o.x + t * d.x, xmin), xmax), std::min(std::max(o.y + t * d.y, ymin), ymax)};
+}
+
+bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
+                 const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line)
+{
+  if (image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 4) || !camera.valid())
+    return false;
+  const CameraIntrinsics& k = camera.intrinsics();
+  n = std::min(n, kMaxTools);
+  const cv::Scalar outline(0, 0, 0, 255);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const ToolOverlay& tool = tools[i];
+    ToolDrawResult r;
+    r.proximity = classify(tool.distance, style);
+    if (tool.visible)
+    {
+      const cv::Scalar colour = toScalar(colourOf(r.proximity, style), order);
+      const Projection tip = camera.project(tool.tip);
+      if (tool.has_shaft)
+      {
+        // The straight shaft is curved by the lens: draw it as a projected polyline.
+        Projection prev = tip;
+        for (int s = 1; s <= style.shaft_segments; ++s)
+        {
+          const double a = static_cast<double>(s) / style.shaft_segments;
+          const Projection cur = camera.project(tool.tip + a * (tool.shaft - tool.tip));
+          if (prev.projectable && cur.projectable)
+            cv::line(image, toFixedPoint(clampForDrawing(prev.pixel, k), kShift),
+                     toFixedPoint(clampForDrawing(cur.pixel, k), kShift), colour, style.line_thickness,
+                     cv::LINE_AA, kShift);
+          prev = cur;
+        }
+        if (prev.in_image)
+          cv::circle(image, toFixedPoint(prev.pixel, kShift), style.circle_radius << kShift, colour,
+                     std::max(1, style.line_thickness - 1), cv::LINE_AA, kShift);
+      }
+      if (tip.in_image)
+      {
+        cv::circle(image, toFixedPoint(tip.pixel, kShift), style.circle_radius << kShift, colour, cv::FILLED,
+                   cv::LINE_AA, kShift);
+        r.drawn = ToolDrawn::kShaft;
+        r.tip_pixel = tip.pixel;
+      }
+      else
+      {
+        // Out of view: a triangle at the image border pointing towards the tip.
+        const double size = style.marker_size;
+        const cv::Point2d c = borderPoint(tip.direction, k, size);
+        cv::Point2d u = tip.direction;
+        const double nu = std::hypot(u.x, u.y);
+        u = (nu > 1e-12 && std::isfinite(nu)) ? u * (1.0 / nu) : cv::Point2d(0.0, 1.0);
+        const cv::Point2d v(-u.y, u.x);
+        const cv::Point pts[3] = {toFixedPoint(c + 0.9 * size * u, kShift),
+                                  toFixedPoint(c - 0.5 * size * u + 0.6 * size * v, kShift),
+                                  toFixedPoint(c - 0.5 * size * u - 0.6 * size * v, kShift)};
+        cv::fillConvexPoly(image, pts, 3, colour, cv::LINE_AA, kShift);
+        for (int e = 0; e < 3; ++e)
+          cv::line(image, pts[e], pts[(e + 1) % 3], outline, 1, cv::LINE_AA, kShift);
+        r.drawn = ToolDrawn::kBorderMarker;
+        r.marker_pixel = c;
+      }
+    }
+    if (results)
+      results[i] = r;
+  }
+
+  if (style.draw_hud || status_line)
+  {
+    const double scale = std::max(0.4, 0.6 * image.rows / 720.0);
+    const int thickness = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
+    const int line_h = static_cast<int>(std::lround(28 * scale));
+    int y = line_h;
+    char text[96];
+    if (style.draw_hud)
+    {
+      for (std::size_t i = 0; i < n; ++i)
+      {
+        const ToolOverlay& tool = tools[i];
+        if (!tool.visible)
+          std::snprintf(text, sizeof(text), "%s: no pose", tool.label);
+        else if (std::isnan(tool.distance))
+          std::snprintf(text, sizeof(text), "%s: -- mm", tool.label);
+        else
+          std::snprintf(text, sizeof(text), "%s: %.1f mm", tool.label, tool.distance * 1e3);
+        const cv::Scalar colour = toScalar(colourOf(classify(tool.distance, style), style), order);
+        cv::putText(image, text, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, outline, thickness + 2,
+                    cv::LINE_AA);
+        cv::putText(image, text, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv::LINE_AA);
+        y += line_h;
+      }
+    }
+    if (status_line && status_line[0] != '\0')
+    {
+      const cv::Scalar colour = toScalar(style.unknown_colour, order);
+      cv::putText(image, status_line, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, outline, thickness + 2,
+                  cv::LINE_AA);
+      cv::putText(image, status_line, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness,
+                  cv::LINE_AA);
+    }
+  }
+  return true;
+}
+
+}  // namespace saras_visual_feedback

@@ -1,0 +1,171 @@
+#!/usr/bin/env python3
+"""rostest checker of the VisualFeedback nodelet (see ../visual_feedback*.test).
+
+~mode:
+  nominal    augmented images at the input rate, one output per input, and each tool drawn in its
+             region's colour at the pixel OpenCV's cv2.projectPoints predicts (distortion included)
+  bad_input  malformed images, NaN poses and short distance arrays: the nodelet keeps publishing
+             and its heartbeat counts the rejections
+  lazy       no camera/pose subscription while nobody listens; subscribes per eye on demand
+"""
+import math
+import sys
+import threading
+import time
+import unittest
+
+import cv2
+import numpy as np
+import rosgraph
+import rospy
+import rostest
+from saras_msgs.msg import ComponentStatus
+from sensor_msgs.msg import Image
+
+import scene
+
+PKG = 'saras_visual_feedback'
+EYES = ('left', 'right')
+
+
+def image_array(msg):
+    return np.frombuffer(msg.data, dtype=np.uint8).reshape(msg.height, msg.step)[:, :3 * msg.width].reshape(
+        msg.height, msg.width, 3)
+
+
+def project(eye, p_world):
+    """Pixel of a world point in an eye's raw image, by OpenCV (the independent reference)."""
+    p_cam = scene.to_frame('endoscope/%s_optical_frame' % eye, p_world)
+    k = np.array(scene.K).reshape(3, 3)
+    px, _ = cv2.projectPoints(p_cam.reshape(1, 1, 3), np.zeros(3), np.zeros(3), k, np.array(scene.D))
+    return px.reshape(2)
+
+
+def subscribers(topic):
+    _, subs, _ = rosgraph.Master('/check_augmented').getSystemState()
+    for name, nodes in subs:
+        if name == topic:
+            return [n for n in nodes if n != rospy.get_name()]
+    return []
+
+
+class Recorder:
+    def __init__(self, topic):
+        self.lock = threading.Lock()
+        self.count = 0
+        self.stamps = set()
+        self.last = None
+        self.sub = rospy.Subscriber(topic, Image, self.cb, queue_size=20, buff_size=2 ** 24)
+
+    def cb(self, msg):
+        with self.lock:
+            self.count += 1
+            self.stamps.add(msg.header.stamp.to_nsec())
+            self.last = msg
+
+
+def wait_for(predicate, timeout):
+    end = time.time() + timeout
+    while time.time() < end and not rospy.is_shutdown():
+        if predicate():
+            return True
+        time.sleep(0.05)
+    return predicate()
+
+
+class TestVisualFeedback(unittest.TestCase):
+    def setUp(self):
+        self.mode = rospy.get_param('~mode', 'nominal')
+        self.rate = rospy.get_param('~rate', 30.0)
+
+    def test_scenario(self):
+        getattr(self, 'scenario_' + self.mode)()
+
+    def scenario_nominal(self):
+        outs = {e: Recorder('/visual_feedback/%s/image' % e) for e in EYES}
+        self.assertTrue(wait_for(lambda: all(o.count > 5 for o in outs.values()), 20.0), 'no augmented images')
+        ins = {e: Recorder('/endoscope/%s/image_raw' % e) for e in EYES}
+        self.assertTrue(wait_for(lambda: all(i.count > 2 for i in ins.values()), 5.0))
+        start = {e: (ins[e].count, outs[e].count) for e in EYES}
+        t0 = time.time()
+        time.sleep(6.0)
+        elapsed = time.time() - t0
+        time.sleep(0.5)  # in-flight frames
+        for e in EYES:
+            n_in = ins[e].count - start[e][0]
+            n_out = outs[e].count - start[e][1]
+            rospy.loginfo('%s: %d in, %d out in %.1f s', e, n_in, n_out, elapsed)
+            self.assertGreaterEqual(n_in / elapsed, 0.8 * self.rate, 'simulated endoscope too slow')
+            # Output at the input rate: every input frame comes out (+-2 for the window edges).
+            self.assertLessEqual(abs(n_out - n_in), 2, '%s: %d in vs %d out' % (e, n_in, n_out))
+            # Outputs carry the input stamps.
+            with outs[e].lock, ins[e].lock:
+                common = outs[e].stamps & ins[e].stamps
+            self.assertGreater(len(common), 0.9 * n_in)
+
+        for e in EYES:
+            msg = outs[e].last
+            self.assertEqual(msg.encoding, 'bgr8')
+            self.assertEqual(msg.header.frame_id, 'endoscope/%s_optical_frame' % e)
+            img = image_array(msg)
+            for name, (_, _, tip, distance, _) in scene.TOOLS.items():
+                px = project(e, tip)
+                u, v = int(round(px[0])), int(round(px[1]))
+                r, g, b = scene.EXPECTED_RGB[name]
+                expected = np.array([b, g, r], dtype=np.uint8)
+                self.assertTrue(np.array_equal(img[v, u], expected),
+                                '%s eye, %s (d=%.3f m): pixel (%d, %d) is %s, expected BGR %s' % (
+                                    e, name, distance, u, v, img[v, u], expected))
+                # The filled tip circle (radius 6 px) is centred on OpenCV's pixel (+-1 px): the
+                # pixels 4 px away in the four directions are inside it (the shaft cannot fake
+                # more than one of them).
+                for du, dv in ((4, 0), (-4, 0), (0, 4), (0, -4)):
+                    q = (int(round(px[0] + du)), int(round(px[1] + dv)))
+                    self.assertTrue(np.array_equal(img[q[1], q[0]], expected),
+                                    '%s %s: pixel %s of the tip circle is %s' % (e, name, q, img[q[1], q[0]]))
+            # The left tool's shaft: 2 cm up the shaft towards its trocar, in its colour.
+            tip = np.array(scene.TOOLS['mesa_left'][2])
+            rcm = np.array(scene.FRAMES['mesa_left/rcm'][1])
+            p = tip + 0.02 * (rcm - tip) / np.linalg.norm(rcm - tip)
+            px = project(e, p)
+            self.assertTrue(np.array_equal(img[int(round(px[1])), int(round(px[0]))], np.array([0, 0, 255], np.uint8)),
+                            'shaft of mesa_left not drawn red at %s' % px)
+
+    def scenario_bad_input(self):
+        statuses = []
+        rospy.Subscriber('/saras/status', ComponentStatus, lambda m: statuses.append(m), queue_size=50)
+        outs = {e: Recorder('/visual_feedback/%s/image' % e) for e in EYES}
+        self.assertTrue(wait_for(lambda: all(o.count > 5 for o in outs.values()), 20.0), 'no augmented images')
+        ins = {e: Recorder('/endoscope/%s/image_raw' % e) for e in EYES}
+        time.sleep(5.0)
+        for e in EYES:
+            # One image in five is truncated and rejected; the others come out.
+            self.assertGreater(outs[e].count, 0.6 * ins[e].count)
+            self.assertLess(outs[e].count, ins[e].count)
+        vf = [s for s in statuses if s.component.endswith('visual_feedback')]
+        self.assertTrue(vf, 'no heartbeat from visual_feedback on /saras/status')
+        self.assertGreater(vf[-1].rejected, 10)
+        self.assertGreater(vf[-1].received, vf[-1].rejected)
+        # Still alive and drawing after all that.
+        n = outs['left'].count
+        self.assertTrue(wait_for(lambda: outs['left'].count > n + 10, 5.0))
+
+    def scenario_lazy(self):
+        time.sleep(3.0)  # the simulated endoscope is running, nobody watches the HMD topics
+        for e in EYES:
+            self.assertEqual(subscribers('/endoscope/%s/image_raw' % e), [], 'subscribed without outputs')
+        self.assertEqual(subscribers('/mesa_left/ee_pose'), [])
+        left = Recorder('/visual_feedback/left/image')
+        self.assertTrue(wait_for(lambda: left.count > 5, 10.0), 'no left image after subscribing')
+        self.assertNotEqual(subscribers('/endoscope/left/image_raw'), [])
+        self.assertEqual(subscribers('/endoscope/right/image_raw'), [], 'right camera subscribed for a left viewer')
+        self.assertNotEqual(subscribers('/mesa_left/ee_pose'), [])
+        left.sub.unregister()
+        self.assertTrue(wait_for(lambda: subscribers('/endoscope/left/image_raw') == [], 5.0),
+                        'still subscribed to the camera after the last viewer left')
+        self.assertTrue(wait_for(lambda: subscribers('/mesa_left/ee_pose') == [], 5.0))
+
+
+if __name__ == '__main__':
+    rospy.init_node('check_augmented')
+    rostest.rosrun(PKG, 'check_augmented_' + rospy.get_param('~mode', 'nominal'), TestVisualFeedback, sys.argv)

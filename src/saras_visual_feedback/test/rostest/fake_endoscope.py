@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Small simulated scene for the VisualFeedback rostests: stereo images + camera_info, static TF,
+tool poses and collision distances (see scene.py).
+
+Private parameters: ~rate [Hz] (image rate, default 30), ~bad_input (bool, default false: when
+true also publishes malformed images, NaN poses and short distance arrays between good ones).
+"""
+import math
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, TransformStamped
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Float64MultiArray
+
+import scene
+
+
+class FakeEndoscope:
+    def __init__(self):
+        self.rate = rospy.get_param('~rate', 30.0)
+        self.bad_input = rospy.get_param('~bad_input', False)
+        self.image_pubs = [rospy.Publisher('/endoscope/%s/image_raw' % e, Image, queue_size=2) for e in ('left', 'right')]
+        self.info_pubs = [rospy.Publisher('/endoscope/%s/camera_info' % e, CameraInfo, queue_size=2)
+                          for e in ('left', 'right')]
+        self.pose_pubs = {n: rospy.Publisher(t[0], PoseStamped, queue_size=1) for n, t in scene.TOOLS.items()}
+        self.dist_pub = rospy.Publisher('/collision/distances', Float64MultiArray, queue_size=1)
+        self.tf = tf2_ros.StaticTransformBroadcaster()
+        self.tf.sendTransform([self._static(child) for child in scene.FRAMES])
+        # A dark vertical gradient (no pure red/yellow/green anywhere).
+        row = bytes([20, 30, 40]) * scene.WIDTH
+        self.data = [b''.join(bytes([20 + (y % 40), 30, 40 + e * 10]) * scene.WIDTH for y in range(scene.HEIGHT))
+                     for e in (0, 1)]
+        del row
+        self.count = 0
+
+    @staticmethod
+    def _static(child):
+        parent, xyz, rpy = scene.FRAMES[child]
+        t = TransformStamped()
+        t.header.stamp = rospy.Time.now()
+        t.header.frame_id = parent
+        t.child_frame_id = child
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = xyz
+        q = scene.quaternion(*rpy)
+        t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
+        return t
+
+    def publish_state(self):
+        bad = self.bad_input and self.count % 3 == 1
+        for name, (_, frame, tip_world, _, _) in scene.TOOLS.items():
+            p = PoseStamped()
+            p.header.stamp = rospy.Time.now()
+            p.header.frame_id = frame
+            x, y, z = scene.to_frame(frame, tip_world)
+            p.pose.position.x, p.pose.position.y, p.pose.position.z = (float('nan'), y, z) if bad else (x, y, z)
+            p.pose.orientation.w = 1.0
+            self.pose_pubs[name].publish(p)
+        msg = Float64MultiArray()
+        msg.data = scene.DISTANCES[:1] if bad else scene.DISTANCES
+        self.dist_pub.publish(msg)
+
+    def publish_images(self):
+        stamp = rospy.Time.now()
+        for e, eye in enumerate(('left', 'right')):
+            info = CameraInfo()
+            info.header.stamp = stamp
+            info.header.frame_id = 'endoscope/%s_optical_frame' % eye
+            info.width, info.height = scene.WIDTH, scene.HEIGHT
+            info.distortion_model = 'plumb_bob'
+            info.D = scene.D
+            info.K = scene.K
+            info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
+            info.P = [scene.K[0], 0, scene.K[2], 0, 0, scene.K[4], scene.K[5], 0, 0, 0, 1, 0]
+            img = Image()
+            img.header = info.header
+            img.width, img.height = scene.WIDTH, scene.HEIGHT
+            img.encoding = 'bgr8'
+            img.step = 3 * scene.WIDTH
+            img.data = self.data[e]
+            if self.bad_input and self.count % 5 == 2:
+                img.data = self.data[e][:100]  # truncated buffer: must be rejected, not crash
+            self.info_pubs[e].publish(info)
+            self.image_pubs[e].publish(img)
+
+    def run(self):
+        r = rospy.Rate(self.rate)
+        while not rospy.is_shutdown():
+            if self.count % 2 == 0:
+                self.publish_state()
+            self.publish_images()
+            self.count += 1
+            try:
+                r.sleep()
+            except rospy.ROSInterruptException:
+                break
+
+
+if __name__ == '__main__':
+    rospy.init_node('fake_endoscope')
+    FakeEndoscope().run()
