@@ -176,9 +176,10 @@ bool CollidingRegions::start(std::string& error)
   for (std::size_t i = 0; i < n; ++i)
   {
     tools_[i].frame = config_.tools[i].frame;
-    tools_[i].sub = nh_.subscribe<geometry_msgs::PoseStamped>(
-        config_.tools[i].topic, 10, boost::bind(&CollidingRegions::poseCallback, this, i, _1), ros::VoidConstPtr(),
-        ros::TransportHints().tcpNoDelay());
+    const boost::function<void(const geometry_msgs::PoseStampedConstPtr&)> callback =
+        [this, i](const geometry_msgs::PoseStampedConstPtr& msg) { poseCallback(i, msg); };
+    tools_[i].sub = nh_.subscribe<geometry_msgs::PoseStamped>(config_.tools[i].topic, 10, callback,
+                                                              ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
     if (config_.fixture_enabled && !config_.tools[i].fixture_topic.empty())
     {
       tools_[i].fixture_pub = nh_.advertise<geometry_msgs::WrenchStamped>(config_.tools[i].fixture_topic, 10);

@@ -16,24 +16,27 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Squared length below which a capsule axis is treated as a point [m^2] (length < 1e-15 m).
 constexpr double kDegenerateLength2 = 1e-30;
 
-inline bool finite(const Eigen::Vector3d& v)
-{
-  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
-}
-
 inline bool validRadius(double r)
 {
   return std::isfinite(r) && r >= 0.0;
 }
 
+/// All coordinates finite: NaN and +-inf propagate through the sum (finite values whose sum
+/// overflows, > 1e307 m, are rejected too, which is intended).
+inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
+{
+  return std::isfinite((a + b).sum() + (a - b).sum());
+}
+
+// std::min/std::max compile to branch-free minsd/maxsd (random inputs mispredict branches).
 inline double clamp01(double x)
 {
-  return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+  return std::min(std::max(x, 0.0), 1.0);
 }
 
 inline double clampTo(double x, double h)
 {
-  return x < -h ? -h : (x > h ? h : x);
+  return std::min(std::max(x, -h), h);
 }
 
 DistanceResult invalid(int code)
@@ -135,30 +138,32 @@ const char* codeName(int code)
 
 int makeBox(const Eigen::Vector3d vertices[], double relative_tolerance, OrientedBox& box)
 {
+  double sum = 0.0;  // NaN / inf propagate
   for (int i = 0; i < 8; ++i)
-    if (!finite(vertices[i]))
-      return kInvalidInput;
+    sum += vertices[i].sum();
+  if (!std::isfinite(sum))
+    return kInvalidInput;
   if (!(relative_tolerance >= 0.0) || !std::isfinite(relative_tolerance))
     return kInvalidInput;
   const Eigen::Vector3d& v0 = vertices[0];
   const Eigen::Vector3d ex = vertices[1] - v0;
   const Eigen::Vector3d ey = vertices[4] - v0;
   const Eigen::Vector3d ez = vertices[3] - v0;
-  const double lx = ex.norm(), ly = ey.norm(), lz = ez.norm();
-  const double diag = std::sqrt(lx * lx + ly * ly + lz * lz);
-  if (!(diag > 0.0))
+  const double lx2 = ex.squaredNorm(), ly2 = ey.squaredNorm(), lz2 = ez.squaredNorm();
+  const double diag2 = lx2 + ly2 + lz2;
+  if (!(diag2 > 0.0))
     return kInvalidBox;
-  const double tol = relative_tolerance * diag;
-  if (lx <= tol || ly <= tol || lz <= tol)
+  const double tol2 = relative_tolerance * relative_tolerance * diag2;
+  const double rt2 = relative_tolerance * relative_tolerance;
+  if (lx2 <= tol2 || ly2 <= tol2 || lz2 <= tol2)
     return kInvalidBox;  // flat or degenerate
-  if (std::abs(ex.dot(ey)) > relative_tolerance * lx * ly || std::abs(ex.dot(ez)) > relative_tolerance * lx * lz ||
-      std::abs(ey.dot(ez)) > relative_tolerance * ly * lz)
+  const double xy = ex.dot(ey), xz = ex.dot(ez), yz = ey.dot(ez);
+  if (xy * xy > rt2 * lx2 * ly2 || xz * xz > rt2 * lx2 * lz2 || yz * yz > rt2 * ly2 * lz2)
     return kInvalidBox;  // not rectangular
-  const Eigen::Vector3d expected[4] = { v0 + ex + ez, v0 + ex + ey, v0 + ex + ey + ez, v0 + ey + ez };
-  const int index[4] = { 2, 5, 6, 7 };
-  for (int k = 0; k < 4; ++k)
-    if ((vertices[index[k]] - expected[k]).norm() > tol)
-      return kInvalidBox;  // wrong order or not a box
+  if ((vertices[2] - v0 - ex - ez).squaredNorm() > tol2 || (vertices[5] - v0 - ex - ey).squaredNorm() > tol2 ||
+      (vertices[6] - v0 - ex - ey - ez).squaredNorm() > tol2 || (vertices[7] - v0 - ey - ez).squaredNorm() > tol2)
+    return kInvalidBox;  // wrong order or not a box
+  const double lx = std::sqrt(lx2), ly = std::sqrt(ly2), lz = std::sqrt(lz2);
 
   // Orthonormal frame (Gram-Schmidt keeps x exact; the residual non-orthogonality is within
   // the tolerance). The handedness of the vertex order is kept.
@@ -167,10 +172,7 @@ int makeBox(const Eigen::Vector3d vertices[], double relative_tolerance, Oriente
   Eigen::Vector3d z = x.cross(y);
   if (z.dot(ez) < 0.0)
     z = -z;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 8; ++i)
-    center += vertices[i];
-  box.center = center / 8.0;
+  box.center = 0.5 * (v0 + vertices[6]);  // midpoint of the main diagonal
   box.axes.col(0) = x;
   box.axes.col(1) = y;
   box.axes.col(2) = z;
@@ -202,7 +204,7 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
 DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
                               const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2)
 {
-  if (!finite(p1) || !finite(p2) || !finite(p3) || !finite(p4) || !validRadius(r1) || !validRadius(r2))
+  if (!allFinite(p1, p2) || !allFinite(p3, p4) || !validRadius(r1) || !validRadius(r2))
     return invalid(kInvalidInput);
   const Eigen::Vector3d d1 = p2 - p1;
   const Eigen::Vector3d d2 = p4 - p3;
@@ -299,12 +301,12 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
 // crossing of two of its 6 linear pieces (kinks of |.| included).
 DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r, const OrientedBox& box)
 {
-  if (!finite(p1) || !finite(p2) || !validRadius(r))
+  if (!allFinite(p1, p2) || !validRadius(r))
     return invalid(kInvalidInput);
   const Eigen::Matrix3d& R = box.axes;
   const Eigen::Vector3d& h = box.half;
   const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
-  const Eigen::Vector3d d = R.transpose() * (p2 - p1);
+  const Eigen::Vector3d d = p1 == p2 ? Eigen::Vector3d::Zero().eval() : (R.transpose() * (p2 - p1)).eval();
 
   auto slope = [&](double t) {
     double g = 0.0;
@@ -317,7 +319,7 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   };
 
   double t = 0.0;
-  const double g0 = slope(0.0);
+  const double g0 = d.isZero(0.0) ? 0.0 : slope(0.0);  // sphere: t = 0
   if (g0 < 0.0)
   {
     const double g1 = slope(1.0);
@@ -377,9 +379,10 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   {
     out.distance = axis - r;
     out.code = classify(out.distance, false);
-    out.normal = R * (v / axis);
+    const Eigen::Vector3d v_world = R * v;  // axis point - box point, world
+    out.normal = v_world * (1.0 / axis);
     const Eigen::Vector3d axis_point = p1 + t * (p2 - p1);
-    out.point2 = box.center + R * q;
+    out.point2 = axis_point - v_world;
     out.point1 = out.code == kIntersecting ? axis_point : Eigen::Vector3d(axis_point - r * out.normal);
     return out;
   }

@@ -188,3 +188,9 @@ TEST(Scene, PelvisModelGivesWarningsAndCollisionsAtTheSite)
   EXPECT_NEAR(scene.compute()[0].distance, -0.001, 1e-9);
   EXPECT_EQ(scene.results()[0].code, saras_collision::kIntersecting);
 }
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -103,10 +103,14 @@ def test_ecm_dwells_then_moves():
     np.testing.assert_allclose(e.joints(14.0), q0, atol=1e-12)
 
 
-def test_shipped_config_puts_tips_in_contract_workspace():
+@pytest.mark.parametrize('which', ['stand-in', 'saras_description'])
+def test_shipped_config_puts_tips_in_contract_workspace(which):
     with open(CONFIG) as f:
         cfg = yaml.safe_load(f)
-    core = dm.DvrkSimCore.from_config(cfg, kinematics=dm.StandInKinematics())
+    kin = dm.StandInKinematics() if which == 'stand-in' else dm.load_kinematics()
+    if kin.name != which:
+        pytest.skip('saras_description not importable')
+    core = dm.DvrkSimCore.from_config(cfg, kinematics=kin)
     frames = rigid.load_frames_file(FRAMES)
     for t in np.arange(0.0, 60.0, 0.37):
         s = core.sample(t)
@@ -161,3 +165,25 @@ def test_description_adapter_uses_module_functions():
     assert k.psm_tip_in_base([0] * 6)[0, 0] == 2
     assert k.ecm_tip_in_base([0] * 4)[0, 0] == 3
     assert k.psm_ik_position([0, 0, -0.1])[2] == pytest.approx(0.1)
+
+
+def test_stand_in_matches_saras_description_conventions():
+    """The stand-in and the URDF model (when built) agree: ECM exactly, PSM with a straight wrist."""
+    desc = pytest.importorskip('saras_description.kinematics')
+    kin = dm.load_kinematics()
+    assert kin.name == 'saras_description'
+    ref = dm.StandInKinematics(wrist_length=0.0)
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        yaw, pitch, roll = rng.uniform(-0.8, 0.8, 3)
+        ins = rng.uniform(0.05, 0.2)
+        np.testing.assert_allclose(kin.ecm_tip_in_base([yaw, pitch, ins, roll]),
+                                   ref.ecm_tip_in_base([yaw, pitch, ins, roll]), atol=1e-12)
+        np.testing.assert_allclose(desc.psm_tip_in_base([yaw, pitch, ins, roll, 0, 0]),
+                                   ref.psm_tip_in_base([yaw, pitch, ins, roll, 0, 0]), atol=1e-12)
+        p = ref.psm_tip_in_base([yaw, pitch, ins, roll, 0, 0])[:3, 3]
+        np.testing.assert_allclose(kin.psm_ik_position(p), [yaw, pitch, ins], atol=1e-9)
+    # hand-eye from saras_description's config: right eye +x of the left, 1-20 mm
+    Tl, Tr = kin.camera_in_tip('left'), kin.camera_in_tip('right')
+    b = (rigid.invert(Tl) @ Tr)[:3, 3]
+    assert 0.001 <= b[0] <= 0.02 and abs(b[1]) < 1e-6 and abs(b[2]) < 1e-6

@@ -1,5 +1,4 @@
 """Socket.IO payload schemas: builders and parsers agree; malformed payloads are refused."""
-import math
 
 import pytest
 

@@ -120,9 +120,11 @@ private:
 int main(int argc, char** argv)
 {
   ros::init(argc, argv, "contact_forces");
+  // Handles outlive the node object so that the FATAL message is printed before shutdown.
+  ros::NodeHandle nh, pnh("~");
   try
   {
-    saras_visual_feedback::ContactForcesNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    saras_visual_feedback::ContactForcesNode node(nh, pnh);
     ros::spin();
   }
   catch (const std::exception& e)

@@ -109,6 +109,48 @@ Rgb colourOf(Proximity p, const OverlayStyle& style)
   }
 }
 
+void HudCache::draw(cv::Mat& image, ChannelOrder order, const char* const* lines, const Rgb* colours, std::size_t n)
+{
+  // Key: image format + every line and colour.
+  char key[1024];
+  int len = std::snprintf(key, sizeof(key), "%dx%d/%d/%d|", image.cols, image.rows, image.type(), static_cast<int>(order));
+  for (std::size_t i = 0; i < n && len > 0 && len < static_cast<int>(sizeof(key)); ++i)
+    len += std::snprintf(key + len, sizeof(key) - len, "%s#%02x%02x%02x|", lines[i], colours[i].r, colours[i].g,
+                         colours[i].b);
+  const double scale = std::max(0.4, 0.6 * image.rows / 720.0);
+  const int thickness = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
+  const int line_h = static_cast<int>(std::lround(28 * scale));
+  if (key_ != key)
+  {
+    int width = 1;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      int base = 0;
+      width = std::max(width, cv::getTextSize(lines[i], cv::FONT_HERSHEY_SIMPLEX, scale, thickness + 2, &base).width);
+    }
+    const int rows = std::min(image.rows, static_cast<int>(line_h * (n + 0.5)));
+    const int cols = std::min(image.cols, width + 20);
+    block_.create(rows, cols, image.type());
+    block_.setTo(cv::Scalar::all(0));
+    mask_.create(rows, cols, CV_8UC1);
+    mask_.setTo(cv::Scalar(0));
+    int y = line_h;
+    for (std::size_t i = 0; i < n; ++i, y += line_h)
+    {
+      const cv::Scalar colour = toScalar(colours[i], order);
+      cv::putText(block_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0, 255),
+                  thickness + 2, cv::LINE_AA);
+      cv::putText(block_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv::LINE_AA);
+      cv::putText(mask_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255), thickness + 2,
+                  cv::LINE_AA);
+    }
+    cv::threshold(mask_, mask_, 0, 255, cv::THRESH_BINARY);
+    key_ = key;
+    ++renders_;
+  }
+  block_.copyTo(image(cv::Rect(0, 0, block_.cols, block_.rows)), mask_);
+}
+
 cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k, double inset)
 {
   const double xmin = inset, ymin = inset;
@@ -135,7 +177,8 @@ cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k,
 }
 
 bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
-                 const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line)
+                 const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line,
+                 HudCache* hud)
 {
   if (image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 4) || !camera.valid())
     return false;
@@ -199,39 +242,38 @@ bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, 
       results[i] = r;
   }
 
-  if (style.draw_hud || status_line)
+  // HUD: one line per tool (distance in mm, in its region's colour) and the status line.
+  char text[kMaxTools + 1][96];
+  const char* lines[kMaxTools + 1];
+  Rgb colours[kMaxTools + 1];
+  std::size_t m = 0;
+  if (style.draw_hud)
   {
-    const double scale = std::max(0.4, 0.6 * image.rows / 720.0);
-    const int thickness = std::max(1, static_cast<int>(std::lround(scale * 1.5)));
-    const int line_h = static_cast<int>(std::lround(28 * scale));
-    int y = line_h;
-    char text[96];
-    if (style.draw_hud)
+    for (std::size_t i = 0; i < n; ++i, ++m)
     {
-      for (std::size_t i = 0; i < n; ++i)
-      {
-        const ToolOverlay& tool = tools[i];
-        if (!tool.visible)
-          std::snprintf(text, sizeof(text), "%s: no pose", tool.label);
-        else if (std::isnan(tool.distance))
-          std::snprintf(text, sizeof(text), "%s: -- mm", tool.label);
-        else
-          std::snprintf(text, sizeof(text), "%s: %.1f mm", tool.label, tool.distance * 1e3);
-        const cv::Scalar colour = toScalar(colourOf(classify(tool.distance, style), style), order);
-        cv::putText(image, text, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, outline, thickness + 2,
-                    cv::LINE_AA);
-        cv::putText(image, text, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv::LINE_AA);
-        y += line_h;
-      }
+      const ToolOverlay& tool = tools[i];
+      if (!tool.visible)
+        std::snprintf(text[m], sizeof(text[m]), "%s: no pose", tool.label);
+      else if (std::isnan(tool.distance))
+        std::snprintf(text[m], sizeof(text[m]), "%s: -- mm", tool.label);
+      else
+        std::snprintf(text[m], sizeof(text[m]), "%s: %.1f mm", tool.label, tool.distance * 1e3);
+      lines[m] = text[m];
+      colours[m] = colourOf(classify(tool.distance, style), style);
     }
-    if (status_line && status_line[0] != '\0')
-    {
-      const cv::Scalar colour = toScalar(style.unknown_colour, order);
-      cv::putText(image, status_line, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, outline, thickness + 2,
-                  cv::LINE_AA);
-      cv::putText(image, status_line, cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness,
-                  cv::LINE_AA);
-    }
+  }
+  if (status_line && status_line[0] != '\0')
+  {
+    lines[m] = status_line;
+    colours[m] = style.unknown_colour;
+    ++m;
+  }
+  if (m > 0)
+  {
+    if (hud)
+      hud->draw(image, order, lines, colours, m);
+    else
+      HudCache().draw(image, order, lines, colours, m);
   }
   return true;
 }

@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <ctime>
 #include <sstream>
 #include <stdexcept>
 
@@ -99,7 +101,7 @@ void VisualFeedbackNodelet::readParameters()
   pose_timeout_ = readPositive(pnh, "pose_timeout", 0.5, "[s]");
   distances_timeout_ = readPositive(pnh, "distances_timeout", 0.5, "[s]");
   image_timeout_ = readPositive(pnh, "image_timeout", 1.0, "[s]");
-  pnh.param("queue_size", queue_size_, 2);
+  pnh.param("queue_size", queue_size_, 3);
   if (queue_size_ < 1)
     throw paramError("queue_size", "must be >= 1");
   pnh.param<std::string>("component", component_, getName());
@@ -375,6 +377,8 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
                                     const sensor_msgs::CameraInfoConstPtr& info, std::size_t eye_index)
 {
   const auto t0 = std::chrono::steady_clock::now();
+  timespec c0;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
   Eye& eye = eyes_[eye_index];
   ++eye.received;
   eye.last_image_ns = static_cast<std::int64_t>(ros::WallTime::now().toNSec());
@@ -412,27 +416,43 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
   if (!model_ok)
     NODELET_ERROR_THROTTLE(5.0, "%s camera: %s; publishing the image without overlay", eye.name.c_str(), why.c_str());
 
-  // Copy the input (shared, const when zero-copied from the camera nodelet) into the output buffer.
-  cv_bridge::CvImagePtr out;
+  // Copy the input (shared and const when zero-copied from the camera nodelet) into an output
+  // buffer from the pool: one memcpy, no allocation in steady state.
+  sensor_msgs::ImagePtr out_msg;
+  cv::Mat canvas;
   ChannelOrder order = ChannelOrder::kBgr;
+  const std::string& e = image->encoding;
+  const bool direct = e == enc::BGR8 || e == enc::BGRA8 || e == enc::RGB8 || e == enc::RGBA8;
   try
   {
-    const std::string& e = image->encoding;
-    if (e == enc::BGR8 || e == enc::BGRA8)
-      out = cv_bridge::toCvCopy(image);
-    else if (e == enc::RGB8 || e == enc::RGBA8)
+    if (direct)
     {
-      out = cv_bridge::toCvCopy(image);
-      order = ChannelOrder::kRgb;
+      order = (e == enc::RGB8 || e == enc::RGBA8) ? ChannelOrder::kRgb : ChannelOrder::kBgr;
+      out_msg = eye.pool.acquire(image->data.size());
+      out_msg->header = image->header;
+      out_msg->height = image->height;
+      out_msg->width = image->width;
+      out_msg->encoding = image->encoding;
+      out_msg->is_bigendian = image->is_bigendian;
+      out_msg->step = image->step;
+      std::memcpy(out_msg->data.data(), image->data.data(), image->data.size());
+      canvas = cv::Mat(static_cast<int>(image->height), static_cast<int>(image->width),
+                       enc::numChannels(e) == 4 ? CV_8UC4 : CV_8UC3, out_msg->data.data(), image->step);
     }
     else
-      out = cv_bridge::toCvCopy(image, enc::BGR8);  // mono, bayer, 16 bit: converted for colour drawing
+    {
+      // mono, bayer, 16 bit: converted for colour drawing (allocates; not the endoscope's format).
+      cv_bridge::CvImagePtr converted = cv_bridge::toCvCopy(image, enc::BGR8);
+      out_msg = converted->toImageMsg();
+      canvas = cv::Mat(static_cast<int>(out_msg->height), static_cast<int>(out_msg->width), CV_8UC3,
+                       out_msg->data.data(), out_msg->step);
+    }
   }
-  catch (const std::exception& e)
+  catch (const std::exception& ex)
   {
     ++eye.rejected;
-    NODELET_ERROR_THROTTLE(1.0, "%s image rejected: cannot convert encoding '%s' (%s)", eye.name.c_str(),
-                           image->encoding.c_str(), e.what());
+    NODELET_ERROR_THROTTLE(1.0, "%s image rejected: cannot convert encoding '%s' (%s)", eye.name.c_str(), e.c_str(),
+                           ex.what());
     return;
   }
 
@@ -513,26 +533,29 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
   }
 
   if (model_ok)
-    drawOverlay(out->image, order, eye.model, style, overlays.data(), n, nullptr);
+    drawOverlay(canvas, order, eye.model, style, overlays.data(), n, nullptr, nullptr, &eye.hud);
   else
   {
     const std::string line = "overlay off: " + why.substr(0, 60);
     CameraModel placeholder;
     CameraIntrinsics ki;
-    ki.width = out->image.cols;
-    ki.height = out->image.rows;
+    ki.width = canvas.cols;
+    ki.height = canvas.rows;
     ki.fx = ki.fy = 1.0;
     placeholder.configure(ki, nullptr);
     for (std::size_t i = 0; i < n; ++i)
       overlays[i].visible = false;
-    drawOverlay(out->image, order, placeholder, style, overlays.data(), n, nullptr, line.c_str());
+    drawOverlay(canvas, order, placeholder, style, overlays.data(), n, nullptr, line.c_str(), &eye.hud);
   }
-  eye.pub.publish(out->toImageMsg());
+  eye.pub.publish(sensor_msgs::ImageConstPtr(out_msg));
   ++eye.published;
   const auto ns = static_cast<std::uint64_t>(
       std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
   eye.busy_ns += ns;
   atomicMax(eye.max_busy_ns, ns);
+  timespec c1;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+  eye.cpu_ns += static_cast<std::uint64_t>((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec));
 }
 
 void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
@@ -581,7 +604,8 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
       text << e.name << ": " << pub << " out";
       if (pub > 0)
         text << ", mean " << (e.busy_ns.load() / 1e6 / static_cast<double>(pub))
-             << " ms, max " << e.max_busy_ns.load() / 1e6 << " ms; ";
+             << " ms, max " << e.max_busy_ns.load() / 1e6 << " ms, cpu mean "
+             << (e.cpu_ns.load() / 1e6 / static_cast<double>(pub)) << " ms; ";
       else
         text << "; ";
     }

@@ -265,6 +265,36 @@ TEST_F(OverlayTest, InvisibleToolDrawsNothingAndHudDrawsText)
   EXPECT_EQ(cv::countNonZero(image(cv::Rect(0, 100, 1280, 620)).reshape(1)), 0);
 }
 
+TEST_F(OverlayTest, HudCacheRendersOncePerContentAndMatchesDirectDrawing)
+{
+  OverlayStyle style;  // HUD on
+  ToolOverlay tools[2];
+  tools[0].label = "SARAS L";
+  tools[0].visible = true;
+  tools[0].tip = cv::Point3d(0.0, 0.0, 0.1);
+  tools[0].distance = 0.0123;
+  tools[1].label = "SARAS R";  // not visible
+  HudCache hud;
+  cv::Mat direct = image.clone(), cached = image.clone();
+  ASSERT_TRUE(drawOverlay(direct, ChannelOrder::kBgr, camera, style, tools, 2, nullptr));
+  ASSERT_TRUE(drawOverlay(cached, ChannelOrder::kBgr, camera, style, tools, 2, nullptr, nullptr, &hud));
+  EXPECT_EQ(cv::norm(direct, cached, cv::NORM_INF), 0.0);
+  EXPECT_EQ(hud.renders(), 1u);
+  EXPECT_GT(cv::countNonZero(cached(cv::Rect(0, 0, 300, 60)).reshape(1)), 100);
+  cv::Mat again = image.clone();
+  ASSERT_TRUE(drawOverlay(again, ChannelOrder::kBgr, camera, style, tools, 2, nullptr, nullptr, &hud));
+  EXPECT_EQ(hud.renders(), 1u);  // same text: blitted
+  EXPECT_EQ(cv::norm(direct, again, cv::NORM_INF), 0.0);
+  tools[0].distance = 0.0031;  // new text and colour
+  ASSERT_TRUE(drawOverlay(again, ChannelOrder::kBgr, camera, style, tools, 2, nullptr, nullptr, &hud));
+  EXPECT_EQ(hud.renders(), 2u);
+  // The HUD line is now red somewhere in the first text line.
+  cv::Mat first_line = again(cv::Rect(0, 0, 300, 20));
+  std::vector<cv::Mat> ch;
+  cv::split(first_line, ch);
+  EXPECT_GT(cv::countNonZero((ch[2] > 150) & (ch[1] < 60)), 10);
+}
+
 TEST_F(OverlayTest, RejectsUnsupportedImages)
 {
   cv::Mat mono(720, 1280, CV_8UC1, cv::Scalar(0));

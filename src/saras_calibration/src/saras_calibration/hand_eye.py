@@ -11,11 +11,14 @@ reports ``T_cam_marker[i]`` (marker in the camera); the marker is fixed in the b
 2. least-median-of-squares search over minimal 3-sample subsets solved with OpenCV's Park
    method; every candidate is scored on *per-sample* residuals (each sample predicts the
    marker pose in the camera; a bad marker detection only spoils its own residual);
-3. inliers = samples whose rotation and translation residuals are below
-   ``3 x median`` (or the absolute thresholds given by the caller);
+3. initial inliers = samples whose rotation and translation residuals are below
+   ``3 x median`` of the best candidate (or the absolute thresholds given by the caller);
 4. nonlinear refinement (``scipy.optimize.least_squares``) of ``X`` and ``T_base_marker`` on
-   the inliers, residuals whitened by the rotation/translation noise estimated from the data;
-   the inlier set is re-evaluated with the refined solution until it is stable.
+   the inliers; each sample's 6-D residual is whitened by its own covariance, propagated from
+   camera noise and robot noise (including the lever arm of the robot's rotation noise); the
+   four noise levels are maximum-likelihood estimates from the residuals. Inliers are then
+   re-classified with a chi-square (6 dof, 99.9 %) gate on the Mahalanobis distance and the
+   refinement repeated (3 rounds).
 
 Units: metres and radians in arrays, degrees only in names ending in ``_deg``.
 """
@@ -215,7 +218,7 @@ def _fit_noise(e, J, s0):
         C = _covariances(J, np.exp(logs))
         sign, logdet = np.linalg.slogdet(C)
         return float(np.sum(logdet) + np.einsum('ni,ni->', e, np.linalg.solve(C, e[..., None])[..., 0]))
-    sol = minimize(nll, np.log(s0), method='Nelder-Mead', options={'xatol': 1e-3, 'fatol': 1e-6, 'maxiter': 600})
+    sol = minimize(nll, np.log(s0), method='Nelder-Mead', options={'xatol': 0.02, 'fatol': 1e-3, 'maxiter': 400})
     return np.exp(sol.x)
 
 
@@ -275,9 +278,9 @@ def solve_hand_eye(ee_poses, marker_poses, method='robust', min_rotation_deg=2.0
     :param min_axis_angle_deg: minimum angle between two motion axes [deg].
     :param ransac_trials: maximum number of 3-sample candidates of the robust search.
     :param rotation_threshold_deg: absolute inlier threshold on the rotation residual [deg];
-        default: 3 x median residual.
+        default: automatic (3 x median, then the chi-square gate of the noise model).
     :param translation_threshold_m: absolute inlier threshold on the translation residual [m];
-        default: 3 x median residual.
+        default: automatic.
     :param min_inlier_fraction: fail if fewer samples than this fraction are inliers.
     :param seed: seed of the random subset draw (results are reproducible).
     :returns: :class:`HandEyeResult`.
@@ -333,7 +336,7 @@ def solve_hand_eye(ee_poses, marker_poses, method='robust', min_rotation_deg=2.0
         sr = max(np.median(r) / 1.54, 1e-7) / np.sqrt(2.0)
         st = max(np.median(t) / 1.54, 1e-9) / np.sqrt(2.0)
         s = np.array([sr, st, sr, st])
-        for it in range(4):
+        for it in range(3):
             X, M = _refine(X, M, ee[inl], cm[inl], s)
             r_all, t_all, rv, dt = hand_eye_residuals(X, M, ee, cm)
             if np.count_nonzero(inl) >= 6:
@@ -357,6 +360,8 @@ def solve_hand_eye(ee_poses, marker_poses, method='robust', min_rotation_deg=2.0
     if np.count_nonzero(inl) < max(3, int(np.ceil(min_inlier_fraction * n))):
         raise HandEyeError('too many outliers: only %d of %d samples are consistent'
                            % (np.count_nonzero(inl), n))
+    if not np.all(inl):
+        check_rotation_excitation(ee[inl], min_rotation_deg, min_axis_angle_deg)
     r_all, t_all, _, _ = hand_eye_residuals(X, M, ee, cm)
     return HandEyeResult(
         transform=X, inliers=[bool(b) for b in inl],

@@ -30,10 +30,10 @@ class SarasArmGeometry(object):
     PA_JOINTS = (
         ((0.0, 0.0, 1.0), 0.10),   # pa_joint_1: column rotation, 10 cm above the rail clamp
         ((0.0, 1.0, 0.0), 0.22),   # pa_joint_2: shoulder
-        ((0.0, 0.0, 1.0), 0.14),   # pa_joint_3: upper-arm rotation
-        ((0.0, 1.0, 0.0), 0.14),   # pa_joint_4: elbow
-        ((0.0, 0.0, 1.0), 0.13),   # pa_joint_5: forearm rotation
-        ((0.0, 1.0, 0.0), 0.13),   # pa_joint_6: wrist
+        ((0.0, 0.0, 1.0), 0.12),   # pa_joint_3: upper-arm rotation
+        ((0.0, 1.0, 0.0), 0.12),   # pa_joint_4: elbow (upper arm 0.24 m)
+        ((0.0, 0.0, 1.0), 0.11),   # pa_joint_5: forearm rotation
+        ((0.0, 1.0, 0.0), 0.11),   # pa_joint_6: wrist (forearm 0.22 m)
         ((0.0, 0.0, 1.0), 0.05),   # pa_joint_7: flange rotation
     )
     #: pa_joint_7 frame -> flange (mechatronic interface of the Endoscope Robot) [m].

@@ -214,13 +214,13 @@ def _rcm_arm_body(u, name, joint_prefix, names, limits, colour):
     """Yaw/pitch links of a da Vinci RCM arm with a simple parallelogram body above the RCM."""
     yaw_link, pitch_link = name + '/outer_yaw_link', name + '/outer_pitch_link'
     u.joint(joint_prefix + names[0], 'revolute', name, yaw_link, axis=(0, -1, 0), limit=limits[names[0]])
-    u.visual(yaw_link, 'box', (0.09, 0.12, 0.16), (0.0, 0.0, 0.62), material=colour)
-    u.rod(yaw_link, (0.0, 0.0, 0.55), (-0.12, 0.0, 0.55), 0.03, 'davinci_grey')
+    u.visual(yaw_link, 'box', (0.07, 0.09, 0.12), (-0.10, 0.0, 0.60), material=colour)
+    u.rod(yaw_link, (0.0, 0.0, 0.55), (-0.10, 0.0, 0.55), 0.02, 'davinci_grey')
     u.joint(joint_prefix + names[1], 'revolute', yaw_link, pitch_link, axis=(-1, 0, 0),
             limit=limits[names[1]])
-    u.rod(pitch_link, (-0.07, 0.0, 0.10), (-0.07, 0.0, 0.52), 0.018, 'davinci_grey')
-    u.rod(pitch_link, (-0.12, 0.0, 0.12), (-0.12, 0.0, 0.55), 0.018, 'davinci_grey')
-    u.visual(pitch_link, 'box', (0.08, 0.05, 0.04), (-0.06, 0.0, 0.10), material=colour)
+    u.rod(pitch_link, (-0.05, 0.0, 0.12), (-0.05, 0.0, 0.52), 0.012, 'davinci_grey')
+    u.rod(pitch_link, (-0.09, 0.0, 0.14), (-0.09, 0.0, 0.55), 0.012, 'davinci_grey')
+    u.visual(pitch_link, 'box', (0.06, 0.04, 0.03), (-0.045, 0.0, 0.12), material=colour)
     return pitch_link
 
 

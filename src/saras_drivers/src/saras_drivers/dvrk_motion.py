@@ -40,9 +40,11 @@ def shaft_rotation(yaw, pitch):
     """Orientation of the instrument shaft in the arm base frame.
 
     The z axis of the returned frame points along the shaft away from the RCM (into the
-    patient); at ``yaw = pitch = 0`` it is the base's -z (dVRK convention).
+    patient); at ``yaw = pitch = 0`` it is the base's -z (dVRK convention). ``yaw`` rotates
+    about -y, ``pitch`` about -x (as saras_description.kinematics.pivot_tip): the shaft direction
+    is ``(sin(yaw) cos(pitch), -sin(pitch), -cos(yaw) cos(pitch))``.
     """
-    return rigid.rot_y(yaw) @ rigid.rot_x(-pitch) @ rigid.rot_x(math.pi)
+    return rigid.rot_y(-yaw) @ rigid.rot_x(-pitch) @ rigid.rot_x(math.pi)
 
 
 def shaft_direction(yaw, pitch):
@@ -58,7 +60,7 @@ def direction_to_yaw_pitch(d):
         raise ValueError('direction has zero length')
     d = d / r
     pitch = math.asin(max(-1.0, min(1.0, -d[1])))
-    yaw = math.atan2(-d[0], -d[2])
+    yaw = math.atan2(d[0], -d[2])
     return yaw, pitch
 
 
@@ -103,12 +105,18 @@ class StandInKinematics(object):
 
 
 class DescriptionKinematics(object):
-    """Adapter over ``saras_description.kinematics`` (URDF-consistent model)."""
+    """Adapter over ``saras_description.kinematics`` (URDF-consistent model).
+
+    Differences from the stand-in are those of the URDF: ``outer_insertion`` is the tip depth
+    with the wrist straight, and the optical frames come from ``config/ecm_hand_eye.yaml`` (the
+    hand-eye calibration), exactly as robot_state_publisher broadcasts them.
+    """
     name = 'saras_description'
 
-    def __init__(self, module, fallback):
+    def __init__(self, module, fallback, hand_eye=None):
         self._m = module
         self._fallback = fallback
+        self._hand_eye = hand_eye
 
     def psm_tip_in_base(self, q):
         return np.asarray(self._m.psm_tip_in_base(list(q)), dtype=float)
@@ -122,10 +130,10 @@ class DescriptionKinematics(object):
         return np.asarray(self._m.ecm_tip_in_base(list(q)), dtype=float)
 
     def camera_in_tip(self, eye):
-        for fn in ('camera_in_tip', 'camera_in_ecm_tip'):
-            if hasattr(self._m, fn):
-                return np.asarray(getattr(self._m, fn)(eye), dtype=float)
-        return self._fallback.camera_in_tip(eye)
+        if self._hand_eye is None:
+            return self._fallback.camera_in_tip(eye)
+        left = np.asarray(self._hand_eye.tip_to_left, dtype=float)
+        return left if eye == 'left' else left @ np.asarray(self._hand_eye.left_to_right, dtype=float)
 
 
 def load_kinematics(prefer_description=True, baseline=0.005):
@@ -133,11 +141,17 @@ def load_kinematics(prefer_description=True, baseline=0.005):
     fallback = StandInKinematics(baseline=baseline)
     if prefer_description:
         try:
-            from saras_description import kinematics as mod  # noqa: WPS433 (optional dependency)
-            if hasattr(mod, 'psm_tip_in_base') and hasattr(mod, 'ecm_tip_in_base'):
-                return DescriptionKinematics(mod, fallback)
+            from saras_description import kinematics as mod  # optional dependency
         except ImportError:
-            pass
+            return fallback
+        hand_eye = None
+        try:
+            from saras_description import config as desc_config
+            hand_eye = desc_config.load_hand_eye()
+        except (ImportError, ValueError, IOError, OSError):
+            hand_eye = None
+        if hasattr(mod, 'psm_tip_in_base') and hasattr(mod, 'ecm_tip_in_base'):
+            return DescriptionKinematics(mod, fallback, hand_eye)
     return fallback
 
 

@@ -210,6 +210,40 @@ def box_from_vertices(v):
     return c + vt.T @ ((lo + hi) / 2.0), vt, (hi - lo) / 2.0
 
 
+def clip_polygon_near(poly, near):
+    """Sutherland-Hodgman clip of a 3D polygon (N, 3) (camera frame) to the half space z >= near."""
+    out = []
+    n = len(poly)
+    for e in range(n):
+        cur, prev = poly[e], poly[e - 1]
+        cin, pin = cur[2] >= near, prev[2] >= near
+        if cin != pin:
+            a = (near - prev[2]) / (cur[2] - prev[2])
+            out.append(prev + a * (cur - prev))
+        if cin:
+            out.append(cur)
+    return np.array(out).reshape(-1, 3)
+
+
+def clip_polygon(poly, xmax, ymax):
+    """Sutherland-Hodgman clip of a 2D polygon (N, 2) to the rectangle |x| <= xmax, |y| <= ymax."""
+    out = [np.asarray(p, float) for p in poly]
+    for axis, sign, lim in ((0, 1, xmax), (0, -1, xmax), (1, 1, ymax), (1, -1, ymax)):
+        inp, out = out, []
+        if not inp:
+            break
+        prev = inp[-1]
+        for cur in inp:
+            cin, pin = sign * cur[axis] <= lim, sign * prev[axis] <= lim
+            if cin != pin:
+                a = (lim - sign * prev[axis]) / (sign * (cur[axis] - prev[axis]))
+                out.append(prev + a * (cur - prev))
+            if cin:
+                out.append(cur)
+            prev = cur
+    return np.array(out).reshape(-1, 2)
+
+
 class PlanarTarget(object):
     """A printed calibration board: grayscale texture on the board plane (z = 0 of its frame).
 
@@ -378,31 +412,46 @@ class SceneRenderer(object):
         tfull = cv2.resize(np.where(hit > 0, t, np.float32(0)), up, interpolation=cv2.INTER_LINEAR)
         hitf = cv2.resize(hit, up, interpolation=cv2.INTER_LINEAR) > 0.999
         col = cv2.remap(self.tex, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
-        img = col.astype(np.float32)
-        cv2.multiply(img, cv2.merge([shade, shade, shade]), dst=img)
+        # uint8 all the way: shade in 1/128 steps (saturating), texture * shade / 128.
+        shade8 = cv2.cvtColor(cv2.convertScaleAbs(shade, alpha=128.0), cv2.COLOR_GRAY2BGR)
+        img = cv2.multiply(col, shade8, scale=1.0 / 128.0)
         depth = np.where(hitf, tfull, np.float32(np.inf)).astype(np.float32)
         # Bone boxes: exact ray/box slab test on the pixels of their projected bounding rectangle.
         for centre, axes, half in self.boxes:
             self._render_box(img, depth, T_world_cam, R, o, centre, axes, half)
         if self.target is not None:
             self._render_target(img, depth, T_world_cam, R, o)
-        return np.clip(img, 0, 255).astype(np.uint8), depth
+        return img, depth
 
     def _roi(self, T_world_cam, pts_world):
-        """Bounding pixel rectangle (x0, y0, x1, y1) of world points, None if not visible."""
+        """Pixel rectangle (x0, y0, x1, y1) covering the convex hull of world points, or None.
+
+        The hull's normalised-coordinate bounding box is clipped to the field of view before
+        projection (points far outside the image cannot be projected through the distortion
+        polynomial); a hull that straddles the camera plane gets the whole image.
+        """
         Tcw = rigid.invert(T_world_cam)
         pc = pts_world @ Tcw[:3, :3].T + Tcw[:3, 3]
-        if np.all(pc[:, 2] <= 1e-4):
+        near = 1e-4
+        if np.all(pc[:, 2] <= near):
             return None
-        if np.any(pc[:, 2] <= 1e-4):
+        if np.any(pc[:, 2] <= near):
             return 0, 0, self.cam.width, self.cam.height
         xy = pc[:, :2] / pc[:, 2:3]
         fx, fy = self.fov
-        if np.any(np.abs(xy[:, 0]) > 1.5 * fx) or np.any(np.abs(xy[:, 1]) > 1.5 * fy):
-            return 0, 0, self.cam.width, self.cam.height
-        uv = self.cam.project(pc)
-        x0, y0 = np.floor(uv.min(axis=0)).astype(int) - 2
-        x1, y1 = np.ceil(uv.max(axis=0)).astype(int) + 3
+        lo = np.maximum(xy.min(axis=0), [-1.02 * fx, -1.02 * fy])
+        hi = np.minimum(xy.max(axis=0), [1.02 * fx, 1.02 * fy])
+        if np.any(lo > hi):
+            return None
+        s = np.linspace(0.0, 1.0, 9)
+        border = np.concatenate([
+            np.stack([lo[0] + s * (hi[0] - lo[0]), np.full_like(s, lo[1])], -1),
+            np.stack([lo[0] + s * (hi[0] - lo[0]), np.full_like(s, hi[1])], -1),
+            np.stack([np.full_like(s, lo[0]), lo[1] + s * (hi[1] - lo[1])], -1),
+            np.stack([np.full_like(s, hi[0]), lo[1] + s * (hi[1] - lo[1])], -1)])
+        uv = self.cam.project(np.column_stack([border, np.ones(len(border))]))
+        x0, y0 = np.floor(uv.min(axis=0)).astype(int) - 3
+        x1, y1 = np.ceil(uv.max(axis=0)).astype(int) + 4
         x0, y0 = max(x0, 0), max(y0, 0)
         x1, y1 = min(x1, self.cam.width), min(y1, self.cam.height)
         if x0 >= x1 or y0 >= y1:
@@ -410,38 +459,70 @@ class SceneRenderer(object):
         return x0, y0, x1, y1
 
     def _render_box(self, img, depth, T_world_cam, R, o, centre, axes, half):
-        corners = np.array([centre + axes.T @ (half * np.array(s)) for s in
-                            [(a, b, c) for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]])
-        roi = self._roi(T_world_cam, corners)
-        if roi is None:
-            return
-        x0, y0, x1, y1 = roi
-        dd = self.rays[y0:y1, x0:x1].astype(np.float64) @ (axes @ R).T  # ray dirs in box axes
-        oo = axes @ (o.astype(np.float64) - centre)
-        with np.errstate(divide='ignore', invalid='ignore'):
-            inv = 1.0 / dd
-            ta = (-half - oo) * inv
-            tb = (half - oo) * inv
-        tmin = np.minimum(ta, tb)
-        tmax = np.maximum(ta, tb)
-        tmin = np.nan_to_num(tmin, nan=-np.inf)
-        tmax = np.nan_to_num(tmax, nan=np.inf)
-        tn = tmin.max(axis=-1)
-        tf = tmax.min(axis=-1)
-        face = tmin.argmax(axis=-1)
-        dsub = depth[y0:y1, x0:x1]
-        hit = (tn <= tf) & (tn > 0) & (tn < dsub)
-        if not np.any(hit):
-            return
-        # Lambert shading with the hit face's normal and a head light.
-        dn = np.linalg.norm(dd, axis=-1)
-        cosang = np.abs(np.take_along_axis(dd, face[..., None], axis=-1)[..., 0]) / dn
-        fall = np.clip((self.light_distance / np.maximum(tn * dn, 1e-3)) ** 1.5, 0.3, 1.3)
-        shade = (0.25 + 0.75 * cosang) * fall
+        """Box by its camera-facing faces: each face, clipped to z >= 1 mm and to the field of
+        view, has its outline (edges sampled through the distortion model) filled; every covered
+        pixel's ray is intersected with the face plane (exact depth, per-pixel Lambert shading)
+        and z-tested against the depth buffer."""
+        Tcw = rigid.invert(T_world_cam)
+        o64 = o.astype(np.float64)
+        fxb, fyb = self.fov
+        H, W = self.cam.height, self.cam.width
+        s = np.linspace(0.0, 1.0, 9)[:-1]  # edge samples (distorted images bend straight edges)
+        jobs = []
+        for i in range(3):
+            j, k = (i + 1) % 3, (i + 2) % 3
+            for sign in (-1.0, 1.0):
+                n = sign * axes[i]
+                fc = centre + sign * half[i] * axes[i]
+                if np.dot(n, o64 - fc) <= 0.0:
+                    continue  # back face
+                quad = np.array([fc + a * half[j] * axes[j] + b * half[k] * axes[k]
+                                 for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+                qc = clip_polygon_near(quad @ Tcw[:3, :3].T + Tcw[:3, 3], 1e-3)
+                if len(qc) < 3:
+                    continue
+                # Straight lines stay straight on the normalised plane: clip there to the field
+                # of view, then sample the outline through the distortion model.
+                poly = clip_polygon(qc[:, :2] / qc[:, 2:3], 1.03 * fxb, 1.03 * fyb)
+                if len(poly) < 3:
+                    continue
+                m = len(poly)
+                pts = np.concatenate([poly[e] + s[:, None] * (poly[(e + 1) % m] - poly[e])
+                                      for e in range(m)])
+                jobs.append((n, fc, axes[j], half[j], axes[k], half[k],
+                             self.cam.project(np.column_stack([pts, np.ones(len(pts))]))))
         bone = np.array([190, 215, 230], np.float32)
-        sub = img[y0:y1, x0:x1]
-        sub[hit] = bone * shade[hit][:, None]
-        dsub[hit] = tn[hit]
+        for n, fc, aj, hj, ak, hk, uv in jobs:
+            x0, y0 = np.maximum(np.floor(uv.min(axis=0)).astype(int) - 1, 0)
+            x1, y1 = np.minimum(np.ceil(uv.max(axis=0)).astype(int) + 2, [W, H])
+            if x0 >= x1 or y0 >= y1:
+                continue
+            mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+            poly = np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)
+            cv2.fillPoly(mask, [poly], 255, cv2.LINE_8, 4)
+            # conservative candidate set; the exact in-face test below decides edge pixels
+            ys, xs = np.nonzero(cv2.dilate(mask, np.ones((3, 3), np.uint8)))
+            if len(ys) == 0:
+                continue
+            ys = ys + y0
+            xs = xs + x0
+            d = self.rays[ys, xs] @ R.T  # world ray directions (float32)
+            nd = d @ n.astype(np.float32)
+            with np.errstate(divide='ignore', invalid='ignore'):
+                t = np.float32(np.dot(n, fc - o64)) / nd
+            ok = (nd < 0) & (t > 0) & (t < depth[ys, xs])
+            rel = o.astype(np.float32) - fc.astype(np.float32)
+            p = rel + t[:, None] * d  # hit point relative to the face centre
+            ok &= (np.abs(p @ aj.astype(np.float32)) <= hj * (1 + 1e-5)) & \
+                (np.abs(p @ ak.astype(np.float32)) <= hk * (1 + 1e-5))
+            if not np.any(ok):
+                continue
+            ys, xs, t, d, nd = ys[ok], xs[ok], t[ok], d[ok], nd[ok]
+            dn = np.linalg.norm(d, axis=1)
+            cosang = -nd / dn
+            fall = np.clip((self.light_distance / np.maximum(t * dn, 1e-3)) ** 1.5, 0.3, 1.3)
+            img[ys, xs] = np.clip(bone * ((0.25 + 0.75 * cosang) * fall)[:, None], 0, 255).astype(np.uint8)
+            depth[ys, xs] = t
 
     def _render_target(self, img, depth, T_world_cam, R, o):
         tgt, T_wb = self.target
@@ -470,7 +551,7 @@ class SceneRenderer(object):
         mx = ((x - tgt.x_min) / tgt.res - 0.5).astype(np.float32)
         my = ((y - tgt.y_min) / tgt.res - 0.5).astype(np.float32)
         val = cv2.remap(tgt.texture, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        v = val[inside].astype(np.float32) * 0.85 + 20.0  # print on matte paper: not pure black/white
+        v = (val[inside].astype(np.float32) * 0.85 + 20.0).astype(np.uint8)  # matte paper
         img[inside] = v[:, None]
         depth[inside] = t[inside]
 

@@ -67,7 +67,8 @@ class SarasArmClient(object):
 
         @sio.event
         def connect():
-            self.connected = True
+            # ``connected`` (commands allowed) is raised only after ``hold`` went out, in
+            # _on_connected: a command can never be overtaken by the hold of its own connection.
             self.connections += 1
 
         @sio.event
@@ -125,6 +126,7 @@ class SarasArmClient(object):
             r = self.sio.call(proto.EV_SUBSCRIBE_STATE, {}, timeout=2.0)
             if isinstance(r, dict):
                 self.info = r.get('info')
+        self.connected = self.sio.connected
         if self.on_connection:
             self.on_connection(True)
 
@@ -139,10 +141,17 @@ class SarasArmClient(object):
                 self._lost.wait()
             except Exception as e:  # connection refused, timeout, server gone mid-handshake
                 self.log.debug('connect to %s failed: %s', self.url, e)
-            try:
-                self.sio.disconnect()
-            except Exception:
-                pass
+            # Let python-socketio finish its own disconnect handling (its reader thread iterates
+            # the namespaces) before touching the client; then make sure the transport is closed.
+            end = time.monotonic() + 2.0
+            while self.sio.eio.state == 'connected' and self.sio.connected and \
+                    time.monotonic() < end and not self._stop.is_set():
+                time.sleep(0.01)
+            if self.sio.eio.state == 'connected':
+                try:
+                    self.sio.disconnect()
+                except Exception:
+                    pass
             self.connected = False
             if self._stop.is_set():
                 break

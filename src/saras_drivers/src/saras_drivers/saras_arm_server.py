@@ -27,7 +27,7 @@ class SarasArmServer(object):
     :param state_rate: state stream rate [Hz] (rate must be a multiple)."""
 
     def __init__(self, model, host='127.0.0.1', port=5000, rate=1000.0, state_rate=250.0,
-                 logger=None):
+                 logger=None, ping_interval=1.0, ping_timeout=1.0):
         if not rate >= 500.0:
             raise ValueError('rate must be >= 500 Hz, got %r' % rate)
         if not 0.0 < state_rate <= rate:
@@ -37,7 +37,10 @@ class SarasArmServer(object):
         self.rate = float(rate)
         self.decimation = max(1, int(round(rate / state_rate)))
         self.log = logger or logging.getLogger('saras_arm_server')
-        self.sio = socketio.AsyncServer(async_mode='aiohttp', logger=False, engineio_logger=False)
+        # Engine.IO heartbeat: a client that misses pings for ping_interval + ping_timeout [s] is
+        # dropped (and a client detects a dead server in the same time).
+        self.sio = socketio.AsyncServer(async_mode='aiohttp', logger=False, engineio_logger=False,
+                                        ping_interval=ping_interval, ping_timeout=ping_timeout)
         self.app = web.Application()
         self.sio.attach(self.app)
         self.commander = None
@@ -45,7 +48,11 @@ class SarasArmServer(object):
         self.rejected = 0
         self.state_seq = 0
         self.clients = 0
+        self.sids = set()
+        self.events = {}             # accepted commands per event name
         self.max_late = 0.0          # worst control-step lateness [s]
+        self._sample_time = time.time()
+        self._wall_offset = time.time() - time.monotonic()
         self.ready = threading.Event()
         self._stop = None
         self._loop = None
@@ -59,11 +66,13 @@ class SarasArmServer(object):
         @sio.event
         async def connect(sid, environ):
             self.clients += 1
+            self.sids.add(sid)
             self.log.info('client %s connected', sid)
 
         @sio.event
         async def disconnect(sid):
             self.clients -= 1
+            self.sids.discard(sid)
             if sid == self.commander:
                 self.model.hold()
                 self.commander = None
@@ -84,6 +93,7 @@ class SarasArmServer(object):
                 self.log.error('%s handler failed: %s', event, e)
                 return proto.reply(False, proto.BAD_PAYLOAD, str(e), cmd_id)
             self.accepted += 1
+            self.events[event] = self.events.get(event, 0) + 1
             r = proto.reply(True, proto.OK, '', cmd_id)
             if extra:
                 r.update(extra)
@@ -134,7 +144,7 @@ class SarasArmServer(object):
         m = self.model
         t = m.tip_in_base()
         self.state_seq += 1
-        return proto.make_state(self.state_seq, time.time(), m.q, t[:3, 3], matrix_to_quat(t[:3, :3]),
+        return proto.make_state(self.state_seq, self._sample_time, m.q, t[:3, 3], matrix_to_quat(t[:3, :3]),
                                 m.rcm_position(), m.moving, m.max_velocity, m.target_id)
 
     # ------------------------------------------------------------------ loop
@@ -148,6 +158,8 @@ class SarasArmServer(object):
             if delay > 0:
                 await asyncio.sleep(delay)
             now = time.monotonic()
+            # wall-clock instant of this model state, on the same time base as the integration
+            self._sample_time = now + self._wall_offset
             self.max_late = max(self.max_late, now - deadline)
             self.model.step(now - last)
             last = now
@@ -169,6 +181,11 @@ class SarasArmServer(object):
         try:
             await self._control()
         finally:
+            for sid in list(self.sids):          # orderly shutdown: tell the clients
+                try:
+                    await self.sio.disconnect(sid)
+                except Exception:  # pylint: disable=broad-except
+                    pass
             await runner.cleanup()
 
     def run(self):
@@ -188,6 +205,13 @@ class SarasArmServer(object):
         self._thread.start()
         if not self.ready.wait(timeout):
             raise RuntimeError('server did not start on %s:%d' % (self.host, self.port))
+
+    def drop_clients(self, timeout=2.0):
+        """Close every client connection from the server side (tests: a network drop)."""
+        async def drop():
+            for sid in list(self.sids):
+                await self.sio.disconnect(sid)
+        asyncio.run_coroutine_threadsafe(drop(), self._loop).result(timeout)
 
     def stop(self):
         if self._loop is not None and self._stop is not None:

@@ -56,13 +56,14 @@ def vector(n, finite=True):
 def read(values, spec, where='~'):
     """Validated parameters: dict name -> value. Unknown extra keys are ignored."""
     out = {}
-    for name, (default, check, unit, _doc) in spec.items():
+    for name, (default, check, unit, doc) in spec.items():
         v = values.get(name, default)
         if isinstance(default, float) and isinstance(v, int) and not isinstance(v, bool):
             v = float(v)
         if not check(v):
-            raise ParamError('parameter %s%s = %r is invalid (%s%s)' % (
-                where, name, v, check.__name__ if check.__doc__ is None else check.__doc__,
-                ', unit: %s' % unit if unit else ''))
+            rule = check.__doc__ or check.__name__
+            raise ParamError('parameter %s%s = %r is invalid: %s%s%s' % (
+                where, name, v, doc, '' if rule == '<lambda>' else ' (%s)' % rule,
+                ' [%s]' % unit if unit else ''))
         out[name] = v
     return out

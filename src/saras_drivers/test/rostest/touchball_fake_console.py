@@ -22,6 +22,7 @@ class FakeConsole(object):
         self.tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.tx.bind((source, 0))
         self.rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.rx.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.rx.bind(('127.0.0.1', command_port))
         self.rx.settimeout(0.05)
         self.seq = 0
@@ -70,5 +71,6 @@ class FakeConsole(object):
 
     def close(self):
         self._stop.set()
+        self._rx_thread.join(1.0)
         self.tx.close()
         self.rx.close()

@@ -1,10 +1,13 @@
 #!/usr/bin/env python3
-"""rostest: 1 kHz of console packets in => every touchball topic published once per packet
-(1 kHz), with the values sent, the TF stylus frame broadcast, and each packet answered with a
+"""rostest: console packets in => every touchball topic published once per packet, at 1 kHz for
+a 1 kHz stream, with the values sent; the TF stylus frame broadcast; each packet answered with a
 command packet carrying the published wrench_cmd.
 
-Counting uses rospy.AnyMsg subscribers (no deserialisation) so that the test node, not the
-receiver, is not the bottleneck on a loaded machine; the values are checked on a typed topic.
+Two phases, because a Python test node cannot itself consume 9 topics x 1 kHz on a 2-core host
+without starving (and, through TCP back-pressure, throttling) the receiver under test:
+1. 200 Hz for 1 s, all 9 streams subscribed (rospy.AnyMsg): exactly one message per packet.
+2. 1 kHz for 3 s, left/state (typed) and right/pose subscribed: publish rate from the header
+   stamps (independent of this node's own receive lag), one message per packet, values.
 """
 import sys
 import threading
@@ -21,39 +24,69 @@ from touchball_fake_console import FakeConsole
 
 RATE = 1000.0
 DURATION = 3.0
-TOPICS = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
-          for t in ('pose', 'state', 'twist', 'buttons')] + ['/tf']
+ALL = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
+       for t in ('pose', 'state', 'twist', 'buttons')] + ['/tf']
 
 
 class Counter(object):
     def __init__(self):
-        self.stamps = []
+        self.n = 0
         self.lock = threading.Lock()
 
     def __call__(self, _msg):
         with self.lock:
-            self.stamps.append(time.monotonic())
+            self.n += 1
 
-    def count_between(self, t0, t1):
-        with self.lock:
-            return sum(1 for s in self.stamps if t0 <= s <= t1)
+
+def settle(values, timeout=15.0):
+    """Wait until the callable's value stops changing (this node may lag on a loaded host)."""
+    end = time.monotonic() + timeout
+    prev = None
+    while time.monotonic() < end:
+        time.sleep(0.5)
+        cur = values()
+        if cur == prev:
+            return cur
+        prev = cur
+    return prev
 
 
 class TestRate(unittest.TestCase):
-    def test_1khz_in_1khz_out(self):
-        port = rospy.get_param('~port')
-        cmd_port = rospy.get_param('~command_port')
-        counters = dict((t, Counter()) for t in TOPICS)
+    def setUp(self):
+        self.port = rospy.get_param('~port')
+        self.cmd_port = rospy.get_param('~command_port')
+        self.status = []
+        self.status_sub = rospy.Subscriber('/touchball/status', ComponentStatus, self.status.append,
+                                           queue_size=100)
+
+    def test_1_every_topic_once_per_packet(self):
+        counters = dict((t, Counter()) for t in ALL)
+        subs = [rospy.Subscriber(t, rospy.AnyMsg, c, queue_size=10000, tcp_nodelay=True)
+                for t, c in counters.items()]
+        console = FakeConsole(self.port, self.cmd_port)
+        time.sleep(1.5)
+        console.stream(200.0, 1.0)
+        counts = settle(lambda: (self.status[-1].received, tuple(c.n for c in counters.values())))
+        accepted = counts[0]
+        self.assertGreaterEqual(accepted, 0.99 * console.seq)
         for t, c in counters.items():
-            rospy.Subscriber(t, rospy.AnyMsg, c, queue_size=10000, tcp_nodelay=True)
+            # + one stale=true state per side when the watchdog fires after the stream
+            self.assertEqual(c.n, accepted + (1 if t.endswith('state') else 0), t)
+        for s in subs:
+            s.unregister()
+        console.close()
+
+    def test_2_1khz_in_1khz_out(self):
         states = []
-        rospy.Subscriber('/touchball/left/state', HapticDeviceState, states.append, queue_size=10000)
-        status = []
-        rospy.Subscriber('/touchball/status', ComponentStatus, status.append, queue_size=100)
+        rospy.Subscriber('/touchball/left/state', HapticDeviceState, states.append, queue_size=10000,
+                         tcp_nodelay=True)
+        poses = Counter()
+        rospy.Subscriber('/touchball/right/pose', rospy.AnyMsg, poses, queue_size=10000, tcp_nodelay=True)
         wrench_pub = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=1)
-        console = FakeConsole(port, cmd_port)
-        time.sleep(1.5)                                   # connections
-        console.stream(RATE, 0.3)                         # warm-up (link becomes valid)
+        console = FakeConsole(self.port, self.cmd_port)
+        time.sleep(1.5)
+        received0 = self.status[-1].received
+        console.stream(RATE, 0.3)                          # warm-up (link valid again)
         w = WrenchStamped()
         w.header.frame_id = 'touch_left/base'
         w.wrench.force.x, w.wrench.force.z = 1.0, -2.0
@@ -63,32 +96,35 @@ class TestRate(unittest.TestCase):
         t0 = time.monotonic()
         t_last = console.stream(RATE, DURATION, t0=10.0)
         send_rate = (console.seq - sent_before) / (t_last - t0)
-        time.sleep(1.0)                                   # let queued messages arrive
-        n_window = console.seq - sent_before
-        for t, c in counters.items():
-            n = c.count_between(t0, time.monotonic())
-            rospy.loginfo('%s: %d messages for %d packets' % (t, n, n_window))
-            # one message per accepted packet (a few may be lost in the OS on a loaded host)
-            self.assertGreaterEqual(n, 0.97 * n_window, t)
-            self.assertLessEqual(n, n_window, t)
         rospy.loginfo('send rate %.1f Hz' % send_rate)
-        self.assertGreater(send_rate, 0.9 * RATE)
-        self.assertEqual(status[-1].rejected, 0)
-        self.assertGreaterEqual(status[-1].received, 0.97 * console.seq)
+        self.assertGreater(send_rate, 0.95 * RATE)
+        settle(lambda: (self.status[-1].received, len(states), poses.n))
+        accepted = self.status[-1].received - received0
+        self.assertEqual(self.status[-1].rejected, 0)
+        self.assertGreaterEqual(accepted, 0.99 * console.seq)   # UDP may drop a few when loaded
+        self.assertEqual(poses.n, accepted)
+        fresh = [m for m in states if not m.stale]
+        self.assertEqual(len(fresh), accepted)
+        self.assertTrue(states[-1].stale)                  # watchdog after the stream stopped
+        stamps = [m.header.stamp.to_sec() for m in fresh if m.sender_time >= console.epoch + 10.0]
+        r = (len(stamps) - 1) / (stamps[-1] - stamps[0])
+        gaps = sorted(b - a for a, b in zip(stamps, stamps[1:]))
+        rospy.loginfo('publish rate %.1f Hz, interval p50 %.2f ms p99 %.2f ms max %.2f ms'
+                      % (r, 1e3 * gaps[len(gaps) // 2], 1e3 * gaps[int(0.99 * len(gaps))], 1e3 * gaps[-1]))
+        self.assertGreater(r, 0.95 * RATE)
+        self.assertLess(r, 1.05 * RATE)
         # the last published state equals the packet it came from, field by field
-        last = states[-1]
+        last = fresh[-1]
         sent = console.sent[last.packet_seq][0]
         p = last.pose.position
         self.assertEqual((p.x, p.y, p.z), sent.position)
         self.assertAlmostEqual(last.clip_angle, sent.clip_angle, places=12)
         self.assertEqual(last.clutch, sent.clutch)
         self.assertEqual(last.header.frame_id, 'touch_left/base')
-        self.assertFalse(last.stale)
         # the device rotates about z at 0.5 rad/s (sender time): the twist estimate sees it
         self.assertAlmostEqual(last.twist.angular.z, 0.5, delta=0.02)
-        # about one command per packet; the wrench came back on the left device only
-        n_cmd = sum(1 for t, _ in console.commands if t >= t0)
-        self.assertGreaterEqual(n_cmd, 0.97 * n_window)
+        # one command per accepted packet; the wrench came back on the left device only
+        self.assertEqual(len(console.commands), accepted)
         cmds = [tp.unpack_command(d) for _, d in console.commands]
         enabled = [c.devices[0] for c in cmds if c.devices[0].enabled]
         self.assertTrue(enabled, 'no enabled force command came back')

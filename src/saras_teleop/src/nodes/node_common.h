@@ -170,15 +170,16 @@ template <class Node>
 int runNode(int argc, char** argv, const char* name)
 {
   ros::init(argc, argv, name);
+  ros::NodeHandle nh, pnh("~");  // outlives the node object, so logging still works in the catch
   try
   {
-    ros::NodeHandle nh, pnh("~");
     Node node(nh, pnh);
     ros::spin();
   }
   catch (const std::exception& e)
   {
     ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), e.what());
+    ros::console::shutdown();
     return 1;
   }
   return 0;

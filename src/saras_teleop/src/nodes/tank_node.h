@@ -10,8 +10,9 @@
  *   both:   sub pin, ext_ereq (Float32); pub pout, ereq (Float32), energy (Float64, T [J]).
  *
  * Timing: the tank steps when the trigger input of a channel arrives (master: the measured twist,
- * i.e. each device sample; slave: the desired twist) and publishes that channel at once; a timer at
- * ~rate steps and publishes every channel if no input triggered a step for 1.5 periods.
+ * i.e. each device sample; slave: the desired twist) and publishes that channel at once, with the
+ * trigger's stamp; a timer at ~rate steps the tank if no input triggered a step for 1.5 periods and
+ * then publishes the (safe) output of the channels whose trigger input is older than ~input_timeout.
  * Energy exchange: a pout message carries the energy sent since the previous one divided by the
  * exchange period 1/rate [W]; the receiver credits msg * (1/rate) [J] once per message, so a lost or
  * delayed packet can only lose energy, never duplicate it (a latched power would).
@@ -259,8 +260,14 @@ private:
     if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
     {
       step(now);
+      // a port whose trigger input still flows gets its output at the next trigger (keeps the
+      // stamp sequence of the master samples); a port without input gets its safe output now
       for (std::size_t i = 0; i < ports_.size(); ++i)
-        publishPort(i, ros::Time());
+      {
+        const ros::Time& trig = Traits::kTriggerOnDesired ? ports_[i].t_des : ports_[i].t_conj;
+        if (trig.isZero() || (now - trig).toSec() > input_timeout_)
+          publishPort(i, ros::Time());
+      }
     }
     // energy exchange: what was sent since the last message, as power over the exchange period
     pout_msg_.data = static_cast<float>(outbox_ / period_);

@@ -67,14 +67,20 @@ private:
   {
     for (const auto& t : m.transforms)
     {
+      bool ok = false;
       try
       {
-        buffer_.setTransform(t, "tf_transformer", is_static);
+        ok = buffer_.setTransform(t, "tf_transformer", is_static);  // false for NaN or empty frames
       }
       catch (const std::exception& e)
       {
+        ok = false;
+      }
+      if (!ok)
+      {
         ++rejected_;
-        ROS_ERROR_THROTTLE(1.0, "tf_transformer: rejected transform %s: %s", t.child_frame_id.c_str(), e.what());
+        ROS_ERROR_THROTTLE(1.0, "tf_transformer: rejected transform %s -> %s (invalid); %lu rejected so far",
+                           t.header.frame_id.c_str(), t.child_frame_id.c_str(), static_cast<unsigned long>(rejected_));
         continue;
       }
       if (t.child_frame_id == tracked_)

@@ -6,8 +6,9 @@
  * (saras_msgs/HapticDeviceState: clutch, stale), c/fixture_wrench (WrenchStamped, optional virtual
  * fixture in the slave base frame); sub link_status (saras_msgs/ComponentStatus, STALE => hold);
  * pub c/des_wrench (WrenchStamped), c/des_twist (TwistStamped), both in mesa_<c>/sbs_world.
- * Computes a channel when its master twist arrives (event-driven, stamps propagated) and on a
- * ~rate timer if that input stops (then it holds: stale master => zero set-points).
+ * Computes a channel when its master twist arrives (event-driven, stamps propagated); a ~rate
+ * timer recomputes a channel whose twists stopped and publishes zero set-points once it holds
+ * (inputs older than ~input_timeout, clutch, link STALE).
  * Params: pose_error_gain [N/m], scale_factor, rotation_scale, max_force [N], rate [Hz],
  * input_timeout [s] (master/slave inputs older than this => hold), fixture_timeout [s].
  */
@@ -141,7 +142,8 @@ private:
     link_ok_ = m->level != saras_msgs::ComponentStatus::STALE;
   }
 
-  void compute(std::size_t i, const ros::Time& stamp)
+  /// from_timer: the master twist stopped arriving; publish only if that makes the channel hold.
+  void compute(std::size_t i, const ros::Time& stamp, bool from_timer = false)
   {
     Channel& c = ch_[i];
     const ros::Time now = ros::Time::now();
@@ -161,7 +163,8 @@ private:
     c.twist.header.stamp = st;
     fromVec(w, c.wrench.wrench);
     fromVec(v, c.twist.twist);
-    if (c.state != TransparencyChannel::WAITING)
+    const bool publish = from_timer ? c.state == TransparencyChannel::HOLD : c.state != TransparencyChannel::WAITING;
+    if (publish)
     {
       c.pub_twist.publish(c.twist);
       c.pub_wrench.publish(c.wrench);
@@ -179,7 +182,7 @@ private:
     {
       Channel& c = ch_[i];
       if (c.t_last.isZero() || (now - c.t_last).toSec() > 1.5 * period_)
-        compute(i, ros::Time());  // master twist stopped: hold (fresh == false) or keep waiting
+        compute(i, ros::Time(), true);  // master twist stopped: hold (fresh == false) or keep waiting
       if (!c.t_master.isZero())
         age = std::max(age, (now - c.t_master).toSec());
       if (c.state == TransparencyChannel::WAITING)

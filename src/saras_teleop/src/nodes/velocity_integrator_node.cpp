@@ -3,10 +3,13 @@
  *
  * Waits for the slave start pose on start_pose (PoseStamped; error after ~start_timeout, keeps
  * waiting without publishing), then integrates tank_twist (TwistStamped, slave base frame) with
- * KDL::addDelta: each new twist first closes the previous interval with the previous twist (zero-order
- * hold), then the set-point is published at once on target_pose (PoseStamped in ~frame_id, stamp of
- * the twist) and every ~tf_decimation-th time as TF ~frame_id -> ~setpoint_frame. A ~rate timer keeps
- * publishing if twists stop. Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
+ * KDL::addDelta over the interval between the header stamps of consecutive twists, i.e. the master
+ * sample times propagated through the chain: sum v_k (t_k - t_{k-1}) reproduces the scaled master
+ * displacement regardless of transport jitter (integrating over arrival times loses or adds motion
+ * whenever messages bunch up). A stamp that does not advance, or advances by more than ~max_step,
+ * is not integrated (restart). The set-point is published at once on target_pose (PoseStamped in
+ * ~frame_id, stamp of the twist) and every ~tf_decimation-th time as TF ~frame_id -> ~setpoint_frame.
+ * A ~rate timer republishes the held set-point if twists stop. Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
  * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
  * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
  */
@@ -49,6 +52,7 @@ public:
     period_ = 1.0 / rate;
     start_timeout_ = paramPositive(pnh, "start_timeout", 10.0);
     input_timeout_ = paramPositive(pnh, "input_timeout", 0.05);
+    max_step_ = paramPositive(pnh, "max_step", 0.05);
     frame_ = paramString(pnh, "frame_id", "mesa_left/sbs_world");
     tf_.header.frame_id = pose_.header.frame_id = frame_;
     tf_.child_frame_id = paramString(pnh, "setpoint_frame", "mesa_left/setpoint");
@@ -81,7 +85,6 @@ private:
       return;
     }
     start_sub_.shutdown();
-    t_last_ = ros::Time::now();
     ROS_INFO("velocity_integrator: start pose received, integrating in %s", frame_.c_str());
   }
 
@@ -102,21 +105,18 @@ private:
     }
     ++received_;
     const ros::Time now = ros::Time::now();
-    advance(now);
-    twist_ = v;
     t_twist_ = now;
-    publish(m->header.stamp);
-  }
-
-  /// Close the interval since the last step with the held twist.
-  void advance(const ros::Time& now)
-  {
-    if (!vi_.started())
-      return;
-    const bool fresh = !t_twist_.isZero() && (now - t_twist_).toSec() <= input_timeout_;
-    hold_ = !link_ok_ || !fresh;
-    vi_.step(twist_, (now - t_last_).toSec(), hold_);
-    t_last_ = now;
+    hold_ = !link_ok_;
+    const ros::Time stamp = m->header.stamp.isZero() ? now : m->header.stamp;
+    if (vi_.started())
+    {
+      const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
+      if (dt > 0.0 && dt <= max_step_)
+        vi_.step(v, dt, hold_);  // this twist held over the sample interval it represents
+      if (dt > 0.0 || last_stamp_.isZero() || dt < -max_step_)
+        last_stamp_ = stamp;
+    }
+    publish(stamp);
   }
 
   void publish(const ros::Time& stamp)
@@ -157,11 +157,10 @@ private:
       }
       return;
     }
+    if (t_twist_.isZero() || (now - t_twist_).toSec() > input_timeout_)
+      hold_ = true;  // no twist stream: the set-point is frozen
     if (t_pub_.isZero() || (now - t_pub_).toSec() > 1.5 * period_)
-    {
-      advance(now);
       publish(ros::Time());
-    }
     const double age = t_twist_.isZero() ? 1e6 : (now - t_twist_).toSec();
     status_.update(hold_ ? saras_msgs::ComponentStatus::STALE : saras_msgs::ComponentStatus::OK,
                    hold_ ? "holding: master link stale or no twist" : "integrating", std::min(age, 1e6),
@@ -171,7 +170,7 @@ private:
   VelocityIntegrator vi_;
   StatusReporter status_;
   tf2_ros::TransformBroadcaster broadcaster_;
-  double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05;
+  double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05, max_step_ = 0.05;
   std::string frame_;
   unsigned tf_decimation_ = 10;
   unsigned long count_ = 0;
@@ -182,7 +181,7 @@ private:
   ros::Publisher pose_pub_;
   ros::Subscriber start_sub_, twist_sub_, link_sub_;
   ros::SteadyTimer timer_;
-  ros::Time t0_, t_last_, t_twist_, t_pub_;
+  ros::Time t0_, t_twist_, t_pub_, last_stamp_;
   uint64_t received_ = 0, rejected_ = 0;
 };
 

@@ -102,6 +102,26 @@ struct ToolDrawResult
 constexpr std::size_t kMaxTools = 4;
 
 /**
+ * @brief Caches the rendered HUD (anti-aliased text costs ~0.15 ms a line at 1080p): the text
+ *        block is re-rendered only when its content, colours or the image format change, and
+ *        blitted through a mask otherwise. One per image stream; not thread-safe.
+ */
+class HudCache
+{
+public:
+  /// Draws @p n lines (text, RGB colour) at the top-left corner of @p image.
+  void draw(cv::Mat& image, ChannelOrder order, const char* const* lines, const Rgb* colours, std::size_t n);
+
+  /// Number of (re-)renderings since construction.
+  std::size_t renders() const { return renders_; }
+
+private:
+  std::string key_;
+  cv::Mat block_, mask_;
+  std::size_t renders_ = 0;
+};
+
+/**
  * @brief Draws tools on an 8-bit, 3- or 4-channel image in place.
  *
  * @param image    CV_8UC3 or CV_8UC4 (other types: nothing drawn, returns false)
@@ -110,10 +130,11 @@ constexpr std::size_t kMaxTools = 4;
  * @param tools    @p n tools, n <= kMaxTools (extra ones are ignored)
  * @param results  optional, @p n entries filled
  * @param status_line optional text drawn under the HUD (e.g. a warning), nullptr for none
+ * @param hud      optional cache of the HUD text (nullptr: rendered directly)
  */
 bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
                  const ToolOverlay* tools, std::size_t n, ToolDrawResult* results,
-                 const char* status_line = nullptr);
+                 const char* status_line = nullptr, HudCache* hud = nullptr);
 
 /**
  * @brief Where the out-of-view marker goes: the point where the ray from the principal point

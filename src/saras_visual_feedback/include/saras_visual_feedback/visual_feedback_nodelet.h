@@ -26,6 +26,7 @@
 
 #include "saras_visual_feedback/VisualFeedbackConfig.h"
 #include "saras_visual_feedback/camera_model.h"
+#include "saras_visual_feedback/image_pool.h"
 #include "saras_visual_feedback/overlay.h"
 
 namespace saras_visual_feedback
@@ -44,12 +45,15 @@ private:
     std::string name;                          ///< "left" / "right"
     image_transport::CameraSubscriber sub;     ///< <name>/image_raw + <name>/camera_info
     image_transport::Publisher pub;            ///< <name>/image
+    ImagePool pool;                            ///< output buffers, reused once released
+    HudCache hud;                              ///< rendered HUD text, redrawn on change only
     CameraModel model;                         ///< touched only by this eye's (serialised) callback
     sensor_msgs::CameraInfo last_info;         ///< calibration the model was built from
     bool info_seen = false;
     std::string model_error;                   ///< why the model is invalid ("" when valid)
     std::atomic<std::uint64_t> received{0}, published{0}, rejected{0}, tf_failures{0};
-    std::atomic<std::uint64_t> busy_ns{0}, max_busy_ns{0};  ///< processing time since last status
+    std::atomic<std::uint64_t> busy_ns{0}, max_busy_ns{0};  ///< wall-clock processing time since start [ns]
+    std::atomic<std::uint64_t> cpu_ns{0};                    ///< thread CPU time of the processing [ns]
     std::atomic<std::int64_t> last_image_ns{0};              ///< wall time of the last image [ns]
   };
 
@@ -106,7 +110,7 @@ private:
   double pose_timeout_ = 0.5;       ///< [s]
   double distances_timeout_ = 0.5;  ///< [s]
   double image_timeout_ = 1.0;      ///< [s] STALE heartbeat without images while subscribed
-  int queue_size_ = 2;
+  int queue_size_ = 3;             ///< camera subscription queue [frames]
   std::string component_;
 
   // Heartbeat.

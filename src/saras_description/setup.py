@@ -1,0 +1,5 @@
+# ROS-agnostic core of saras_description (installed by catkin_python_setup).
+from setuptools import setup
+from catkin_pkg.python_setup import generate_distutils_setup
+
+setup(**generate_distutils_setup(packages=['saras_description'], package_dir={'': 'src'}))

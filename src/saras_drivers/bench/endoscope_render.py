@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""Benchmark of the stereo endoscope renderer (endoscope_sim's per-frame work), 1 process.
+
+For each resolution: time per stereo frame (left + right) when the camera is still (cached
+static layer + 4 instrument shafts; the usual case, the ECM moves now and then) and when it
+moves (static layer re-rendered every frame), plus the publishing costs (Image bytes copy,
+JPEG encode for image_raw/compressed). CPU = process CPU time / wall time (cores busy).
+Usage: endoscope_render.py [--frames N]
+"""
+import argparse
+import os
+import time
+
+import cv2
+import numpy as np
+
+from saras_drivers import dvrk_motion as dm
+from saras_drivers import endoscope_renderer as er
+from saras_drivers import rigid
+from saras_drivers.tissue_surface import TissueSurface
+
+CFG = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+
+def measure(fn, n):
+    fn(0)
+    w0, c0 = time.perf_counter(), time.process_time()
+    for i in range(n):
+        fn(i + 1)
+    w, c = time.perf_counter() - w0, time.process_time() - c0
+    return w / n, c / n
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--frames', type=int, default=20)
+    args = ap.parse_args()
+    kin = dm.StandInKinematics()
+    T_ecm = rigid.make_transform(t=[0.14, 0.0, 0.24])
+    yaw, pitch = dm.direction_to_yaw_pitch([-0.13, 0.0, -0.17])
+    tools = [(np.array([0.03, -0.03, 0.09]), np.array([0.10, -0.08, 0.22]), 0.004),
+             (np.array([0.03, 0.035, 0.095]), np.array([0.10, 0.08, 0.22]), 0.004),
+             (np.array([0.0, 0.05, 0.075]), np.array([0.02, 0.13, 0.20]), 0.0025),
+             (np.array([0.0, -0.05, 0.075]), np.array([0.02, -0.13, 0.20]), 0.0025)]
+    # The platform's pelvic-bone boxes (saras_collision, bones_marker_frame = world + 0.10 z)
+    # when present, else two stand-in boxes.
+    pelvis = os.path.join(CFG, '..', '..', 'saras_collision', 'config', 'pelvis_vertices.txt')
+    if os.path.isfile(pelvis):
+        boxes = [b + [0.0, 0.0, 0.10] for b in er.load_boxes(pelvis)]
+    else:
+        boxes = [np.array([[x, y, z] for x in (a, a + 0.03) for y in (b, b + 0.02) for z in (0.10, 0.13)])
+                 for a, b in ((-0.05, 0.03), (-0.05, -0.05))]
+    rows = []
+    print('cv2 threads: %d, cpus: %d, load average: %s, bone boxes: %d' % (
+        cv2.getNumThreads(), os.cpu_count(), ' '.join('%.2f' % v for v in os.getloadavg()), len(boxes)))
+    for (w, h) in ((1280, 720), (1920, 1080)):
+        base = er.CameraModel.from_yaml_file(os.path.join(CFG, 'endoscope_left.yaml')).scaled(w, h)
+        t0 = time.perf_counter()
+        rend = {eye: er.SceneRenderer(base, TissueSurface(), boxes=boxes) for eye in ('left', 'right')}
+        setup = time.perf_counter() - t0
+
+        def pose(eye, i, moving):
+            q = [yaw + (0.002 * i if moving else 0.0), pitch, 0.09, 0.0]
+            return T_ecm @ kin.ecm_tip_in_base(q) @ kin.camera_in_tip(eye)
+        out = {}
+
+        def frame(i, moving):
+            for eye in ('left', 'right'):
+                out[eye] = rend[eye].render(pose(eye, i, moving), tools, out=out.get(eye))
+        still = measure(lambda i: frame(i, False), args.frames)
+        moving = measure(lambda i: frame(i, True), max(3, args.frames // 4))
+        img = out['left']
+        tobytes = measure(lambda i: [img.tobytes() for _ in range(2)], args.frames)
+        jpeg = measure(lambda i: [cv2.imencode('.jpg', img, [cv2.IMWRITE_JPEG_QUALITY, 85])
+                                  for _ in range(2)], max(3, args.frames // 2))
+        rows.append((w, h, setup, still, moving, tobytes, jpeg))
+    print()
+    print('%-10s %8s | %-22s | %-22s | %-14s | %-14s | %s' % (
+        'resolution', 'setup s', 'still: ms/stereo (fps)', 'moving: ms/stereo (fps)',
+        'raw copy ms', 'jpeg x2 ms', 'CPU at 30 Hz still+raw / +jpeg'))
+    for w, h, setup, still, moving, tob, jpg in rows:
+        cpu30 = 30.0 * (still[1] + tob[1])
+        cpu30j = cpu30 + 30.0 * jpg[1]
+        fmt = ('%4dx%-5d %8.2f | %7.1f (%5.1f fps)      | %7.1f (%5.1f fps)      | %7.2f        '
+               '| %7.1f        | %4.0f%% / %4.0f%% of one core')
+        print(fmt % (w, h, setup, still[0] * 1e3, 1.0 / still[0], moving[0] * 1e3, 1.0 / moving[0],
+                     tob[0] * 1e3, jpg[0] * 1e3, 100 * cpu30, 100 * cpu30j))
+    print('\nstill = ECM at rest (static layer cached); moving = ECM moving every frame.')
+    print('Excludes ROS serialisation/transport of the 2.7 MB (720p) / 6.2 MB (1080p) images.')
+
+
+if __name__ == '__main__':
+    main()

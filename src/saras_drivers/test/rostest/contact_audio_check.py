@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""rostest: contact_sim depth/direction against the tissue model for a tip driven through TF
+(in contact, out of contact), depth 0 for a tool without pose; microphone chunk format."""
+import sys
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import TransformStamped
+
+from saras_drivers.tissue_surface import TissueSurface
+from saras_msgs.msg import AudioChunk, ComponentStatus, Contact
+
+
+class ContactAudioTest(unittest.TestCase):
+    def setUp(self):
+        self.br = tf2_ros.TransformBroadcaster()
+        self.static = tf2_ros.StaticTransformBroadcaster()
+        m = TransformStamped()
+        m.header.stamp = rospy.Time.now()
+        m.header.frame_id, m.child_frame_id = 'world', 'mesa_left/sbs_world'
+        m.transform.translation.y = 0.45
+        m.transform.rotation.z, m.transform.rotation.w = -np.sqrt(0.5), np.sqrt(0.5)  # yaw -90 deg
+        self.static.sendTransform(m)
+        self.surf = TissueSurface.from_config(rospy.get_param('~tissue'))
+
+    def send_tip(self, p):
+        m = TransformStamped()
+        m.header.stamp = rospy.Time.now()
+        m.header.frame_id, m.child_frame_id = 'world', 'mesa_left/tool_tip'
+        m.transform.translation.x, m.transform.translation.y, m.transform.translation.z = p
+        m.transform.rotation.w = 1.0
+        self.br.sendTransform(m)
+
+    def contact_for(self, p, n=10):
+        got = []
+        sub = rospy.Subscriber('/mesa_left/contact', Contact, got.append)
+        end = rospy.Time.now() + rospy.Duration(1.5)
+        while rospy.Time.now() < end:
+            self.send_tip(p)
+            rospy.sleep(0.02)
+        got[:] = []
+        end = rospy.Time.now() + rospy.Duration(1.0)
+        while rospy.Time.now() < end:
+            self.send_tip(p)
+            rospy.sleep(0.02)
+        sub.unregister()
+        self.assertGreater(len(got), n)
+        return got[-1]
+
+    def test_contact_values(self):
+        x, y = 0.01, 0.02
+        h = float(self.surf.height(x, y))
+        inside = self.contact_for([x, y, h - 0.004])
+        _, nrm, sd = self.surf.closest_point([x, y, h - 0.004])
+        self.assertAlmostEqual(inside.depth, -sd, delta=1e-6)
+        self.assertGreater(inside.depth, 0.003)
+        # direction is expressed in mesa_left/sbs_world (yaw -90 deg about world z)
+        d = np.array([inside.direction.x, inside.direction.y, inside.direction.z])
+        R_wb = np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]], float)   # Rz(-pi/2)
+        np.testing.assert_allclose(R_wb @ d, nrm, atol=1e-6)
+        outside = self.contact_for([x, y, h + 0.01])
+        self.assertEqual(outside.depth, 0.0)
+        right = rospy.wait_for_message('/mesa_right/contact', Contact, 5.0)
+        self.assertEqual(right.depth, 0.0)
+        self.assertGreater(abs(right.direction.z), 0.0)   # never a zero vector
+        st = []
+        sub = rospy.Subscriber('/saras/status', ComponentStatus, st.append)
+        rospy.sleep(2.5)
+        sub.unregister()
+        mine = [s for s in st if s.component.endswith('contact_sim')]
+        self.assertTrue(mine and mine[-1].level == ComponentStatus.WARN and 'mesa_right' in mine[-1].message)
+        self.assertGreater(mine[-1].rejected, 0)
+
+    def test_audio_chunks(self):
+        got = []
+        sub = rospy.Subscriber('/audio/mic', AudioChunk, got.append)
+        rospy.sleep(1.5)
+        sub.unregister()
+        self.assertGreater(len(got), 50)
+        for a, b in zip(got[:-1], got[1:]):
+            self.assertEqual(b.header.seq, a.header.seq + 1)
+            self.assertAlmostEqual((b.header.stamp - a.header.stamp).to_sec(), 0.02, delta=1e-6)
+        m = got[-1]
+        self.assertEqual((m.sample_rate, m.channels, m.encoding, len(m.samples)), (16000, 1, 'S16LE', 320))
+        self.assertTrue(m.source in ('synthetic',) or m.source)
+        pcm = np.concatenate([np.asarray(g.samples) for g in got])
+        self.assertGreater(np.abs(pcm).max(), 500)   # not silence
+
+
+if __name__ == '__main__':
+    rospy.init_node('contact_audio_check')
+    rostest.rosrun('saras_drivers', 'contact_audio', ContactAudioTest, sys.argv)

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""rostest (saras_arm_sim + saras_arms_driver + saras_arms_state): target reached within
+tolerance with the shaft through the RCM, motor velocity limit respected, RCM-violating target
+rejected with no motion, clip commands, state topics at >= 250 Hz."""
+import math
+import sys
+import threading
+import time
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+from geometry_msgs.msg import PointStamped, PoseStamped
+from sensor_msgs.msg import JointState
+
+from saras_drivers.saras_arm_model import quat_to_matrix
+from saras_msgs.msg import ComponentStatus
+from saras_msgs.srv import SetClip, SetMaxVelocity
+
+NS = '/mesa_left/'
+FRAME = 'mesa_left/sbs_world'
+
+
+def axis_angle(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k.dot(k)
+
+
+class TestMotion(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.lock = threading.Lock()
+        cls.poses, cls.joints, cls.rcm, cls.status = [], [], None, []
+        rospy.Subscriber(NS + 'ee_pose', PoseStamped, cls.on_pose, queue_size=1000, tcp_nodelay=True)
+        rospy.Subscriber(NS + 'joint_states', JointState, cls.on_js, queue_size=1000, tcp_nodelay=True)
+        rospy.Subscriber(NS + 'rcm_position', PointStamped, cls.on_rcm, queue_size=10)
+        rospy.Subscriber('/saras/status', ComponentStatus, cls.status.append, queue_size=100)
+        cls.pub = rospy.Publisher(NS + 'target_pose', PoseStamped, queue_size=10)
+        rospy.wait_for_service(NS + 'set_max_velocity', 30.0)
+        cls.set_vel = rospy.ServiceProxy(NS + 'set_max_velocity', SetMaxVelocity)
+        cls.set_clip = rospy.ServiceProxy(NS + 'set_clip', SetClip)
+        end = time.monotonic() + 30.0
+        while time.monotonic() < end and (cls.rcm is None or not cls.poses):
+            time.sleep(0.05)
+
+    @classmethod
+    def on_pose(cls, m):
+        with cls.lock:
+            cls.poses.append((time.monotonic(), m))
+
+    @classmethod
+    def on_js(cls, m):
+        with cls.lock:
+            cls.joints.append(m)
+
+    @classmethod
+    def on_rcm(cls, m):
+        cls.rcm = np.array([m.point.x, m.point.y, m.point.z])
+
+    def tip(self):
+        with self.lock:
+            p = self.poses[-1][1].pose
+        return (np.array([p.position.x, p.position.y, p.position.z]),
+                quat_to_matrix((p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w)))
+
+    def send(self, position):
+        m = PoseStamped()
+        m.header.frame_id = FRAME
+        m.header.stamp = rospy.Time.now()
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = position
+        self.pub.publish(m)             # zero quaternion: position-only target
+
+    def target_from_current(self, angle, depth):
+        p, _ = self.tip()
+        d = p - self.rcm
+        axis = np.cross(d, [1.0, 0.0, 0.0])
+        return self.rcm + axis_angle(axis, angle).dot(d / np.linalg.norm(d)) * depth
+
+    def drive_to(self, goal, timeout):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            self.send(goal)
+            time.sleep(0.05)
+            if np.linalg.norm(self.tip()[0] - goal) < 1e-4:
+                return True
+        return False
+
+    def test_1_rates_and_frames(self):
+        # stamps = the simulator's state times (use_robot_time with sim:=true): the rate at which
+        # the arm's state is published, independent of this test node's own receive jitter
+        self.assertIsNotNone(self.rcm)
+        with self.lock:
+            n0, t0 = len(self.joints), time.monotonic()
+        time.sleep(2.0)
+        with self.lock:
+            stamps = [m.header.stamp.to_sec() for m in self.joints[n0:]]
+        rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
+        rospy.loginfo('joint_states rate %.1f Hz' % rate)
+        self.assertGreaterEqual(rate, 250.0)
+        self.assertEqual(self.poses[-1][1].header.frame_id, FRAME)
+        self.assertEqual(len(self.joints[-1].name), 13)
+        self.assertTrue(all(n.startswith('mesa_left/') for n in self.joints[-1].name))
+
+    def test_2_target_reached_through_rcm(self):
+        goal = self.target_from_current(0.2, 0.14)
+        self.assertTrue(self.drive_to(goal, 15.0), 'target not reached')
+        p, r = self.tip()
+        self.assertLess(np.linalg.norm(p - goal), 1e-4)
+        # the instrument axis (tool z) passes through the RCM
+        d = self.rcm - p
+        self.assertLess(np.linalg.norm(d - d.dot(r[:, 2]) * r[:, 2]), 1e-6)
+
+    def test_3_velocity_limit(self):
+        self.assertTrue(self.set_vel(0.3).success)
+        self.addCleanup(self.set_vel, 1.0)
+        self.assertFalse(self.set_vel(50.0).success)      # above the hardware limit: refused
+        goal = self.target_from_current(-0.35, 0.12)
+        with self.lock:
+            n0 = len(self.joints)
+        self.assertTrue(self.drive_to(goal, 20.0), 'target not reached')
+        with self.lock:
+            js = self.joints[n0:]
+        q = np.array([m.position[7:13] for m in js])
+        t = np.array([m.header.stamp.to_sec() for m in js])
+        k = 15                                            # ~50 ms windows (stamps = simulator time)
+        v = np.abs(q[k:] - q[:-k]) / (t[k:] - t[:-k])[:, None]
+        limits = np.array([0.3, 0.3, 0.3 * 0.05, 0.3, 0.3, 0.3])
+        ratio = np.max(v / limits, axis=0)
+        rospy.loginfo('peak velocity / limit per motor: %s' % np.round(ratio, 3))
+        self.assertLess(np.max(ratio), 1.001)             # never faster than the limit (stamp rounding)
+        self.assertGreater(np.max(ratio), 0.8)            # and it does move at the limit
+
+    def test_4_rcm_violation_rejected_no_motion(self):
+        t_p0 = time.monotonic()
+        p0, _ = self.tip()
+        outside = self.rcm + 0.03 * (self.rcm - p0) / np.linalg.norm(self.rcm - p0)
+        n_status = len(self.status)
+        for _ in range(5):
+            self.send(outside)
+            time.sleep(0.05)
+        t0 = time.monotonic()
+        time.sleep(1.0)
+        with self.lock:
+            recent = [m for t, m in self.poses if t >= t_p0]
+        moved = max(np.linalg.norm(np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z]) - p0)
+                    for m in recent)
+        self.assertLess(moved, 1e-9)
+        warn = [s for s in self.status[n_status:] if s.component == 'mesa_left/saras_arms_driver'
+                and s.level == ComponentStatus.WARN and 'rcm_violation' in s.message]
+        self.assertTrue(warn, 'driver did not report the rejection')
+        self.assertGreaterEqual(warn[-1].rejected, 1)
+
+    def test_5_clip(self):
+        self.assertTrue(self.set_clip(0.4, float('nan')).success)
+        end = time.monotonic() + 5.0
+        while time.monotonic() < end and abs(self.joints[-1].position[12] - 0.4) > 1e-9:
+            time.sleep(0.05)
+        self.assertAlmostEqual(self.joints[-1].position[12], 0.4, places=9)
+        roll = self.joints[-1].position[11]
+        self.assertFalse(self.set_clip(5.0, float('nan')).success)   # beyond the jaw limit
+        self.assertTrue(self.set_clip(float('nan'), 0.5).success)
+        end = time.monotonic() + 5.0
+        while time.monotonic() < end and abs(self.joints[-1].position[11] - 0.5) > 1e-9:
+            time.sleep(0.05)
+        self.assertAlmostEqual(self.joints[-1].position[11], 0.5, places=9)
+        self.assertNotAlmostEqual(roll, 0.5)
+        self.assertAlmostEqual(self.joints[-1].position[12], 0.4, places=9)
+
+
+if __name__ == '__main__':
+    rospy.init_node('saras_arm_motion_test')
+    rostest.rosrun('saras_drivers', 'saras_arm_motion', TestMotion, sys.argv)

@@ -1,0 +1,255 @@
+#!/usr/bin/env python3
+"""Closed-loop rostest of the real teleop nodes with a fake master (TF touch_left/stylus moving on a
+sinusoid) and a fake SARAS arm (ee_pose = last target_pose). Checks tracking of the scaled master in
+the slave base frame, the force command, tank energies, bad-input robustness and the stale-link hold.
+Parameters (~): expect_delay [s] (one-way channel delay configured in the .test), check_stale (bool)."""
+import math
+import subprocess
+import sys
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, WrenchStamped
+from saras_msgs.msg import ComponentStatus
+from std_msgs.msg import Float64
+
+AMP = 0.02    # master stroke along touch_left/base x [m]
+FREQ = 0.25   # [Hz]
+SCALE = 0.5   # transparency scale_factor (config/transparency.yaml)
+
+
+# world_frames.yaml of saras_bringup (parent, child, xyz, yaw about z)
+STATIC_FRAMES = [
+    ('world', 'mesa_left/sbs_world', (0.0, 0.45, 0.0), -math.pi / 2),
+    ('world', 'mesa_right/sbs_world', (0.0, -0.45, 0.0), math.pi / 2),
+    ('world', 'console', (-1.2, 0.0, 0.8), 0.0),
+    ('console', 'touch_left/base', (0.0, 0.2, 0.0), 0.0),
+    ('console', 'touch_right/base', (0.0, -0.2, 0.0), 0.0),
+]
+
+
+class Fixture(object):
+    @staticmethod
+    def static(parent, child, xyz, yaw):
+        t = TransformStamped()
+        t.header.stamp = rospy.Time.now()
+        t.header.frame_id = parent
+        t.child_frame_id = child
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = xyz
+        t.transform.rotation.z = math.sin(yaw / 2)
+        t.transform.rotation.w = math.cos(yaw / 2)
+        return t
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.targets = []          # (receive time, stamp, x, y, z)
+        self.wrenches = []
+        self.energy = {'master': [], 'slave': []}
+        self.status = []
+        self.ee = None
+        self.master_log = []       # (time, x in touch base)
+        self.stale = False
+        self.nan_stylus = False
+        self.br = tf2_ros.TransformBroadcaster()
+        self.static_br = tf2_ros.StaticTransformBroadcaster()
+        self.static_br.sendTransform([self.static(*f) for f in STATIC_FRAMES])
+        self.ee_pub = rospy.Publisher('/mesa_left/ee_pose', PoseStamped, queue_size=10, tcp_nodelay=True)
+        self.status_pub = rospy.Publisher('/touchball/status', ComponentStatus, queue_size=10)
+        self.force_pub = rospy.Publisher('/mesa_left/contact_force', Twist, queue_size=10)
+        self.tank_pub = rospy.Publisher('/teleop/left/tank_wrench', WrenchStamped, queue_size=10)
+        rospy.Subscriber('/mesa_left/target_pose', PoseStamped, self.on_target, tcp_nodelay=True)
+        rospy.Subscriber('/touchball/left/wrench_cmd', WrenchStamped, self.on_wrench, tcp_nodelay=True)
+        rospy.Subscriber('/teleop/tank_master/energy', Float64, lambda m: self.on_energy('master', m))
+        rospy.Subscriber('/teleop/tank_slave/energy', Float64, lambda m: self.on_energy('slave', m))
+        rospy.Subscriber('/saras/status', ComponentStatus, self.on_status)
+        self.start_pose = PoseStamped()
+        self.start_pose.header.frame_id = 'mesa_left/sbs_world'
+        self.start_pose.pose.position.x, self.start_pose.pose.position.y, self.start_pose.pose.position.z = 0.3, 0.1, 0.15
+        self.start_pose.pose.orientation.w = 1.0
+        self.t0 = time.time()
+        self.run = True
+        threading.Thread(target=self.master_loop, daemon=True).start()
+        threading.Thread(target=self.arm_loop, daemon=True).start()
+
+    def on_target(self, m):
+        with self.lock:
+            self.targets.append((time.time(), m.header.stamp.to_sec(), m.pose.position.x, m.pose.position.y,
+                                 m.pose.position.z, m.header.frame_id))
+            self.ee = m
+
+    def on_wrench(self, m):
+        with self.lock:
+            self.wrenches.append((m.header.frame_id, m.wrench.force.x, m.wrench.force.y, m.wrench.force.z))
+
+    def on_energy(self, side, m):
+        with self.lock:
+            self.energy[side].append(m.data)
+
+    def on_status(self, m):
+        with self.lock:
+            self.status.append((m.component, m.level, m.rejected))
+
+    def master_x(self, t):
+        return AMP * math.sin(2 * math.pi * FREQ * t)
+
+    def master_loop(self):
+        r = rospy.Rate(500)
+        while self.run and not rospy.is_shutdown():
+            t = time.time() - self.t0
+            x = self.master_x(t)
+            ts = TransformStamped()
+            ts.header.stamp = rospy.Time.now()
+            ts.header.frame_id = 'touch_left/base'
+            ts.child_frame_id = 'touch_left/stylus'
+            ts.transform.translation.x = float('nan') if self.nan_stylus else x
+            ts.transform.translation.y = 0.01
+            ts.transform.translation.z = 0.05
+            ts.transform.rotation.w = 1.0
+            self.br.sendTransform(ts)
+            with self.lock:
+                self.master_log.append((time.time(), x))
+            r.sleep()
+
+    def arm_loop(self):
+        r = rospy.Rate(250)
+        k = 0
+        while self.run and not rospy.is_shutdown():
+            with self.lock:
+                m = self.ee if self.ee is not None else self.start_pose
+            out = PoseStamped()
+            out.header.stamp = rospy.Time.now()
+            out.header.frame_id = 'mesa_left/sbs_world'
+            out.pose = m.pose
+            self.ee_pub.publish(out)
+            k += 1
+            if k % 25 == 0:
+                st = ComponentStatus()
+                st.header.stamp = rospy.Time.now()
+                st.component = 'touchball_receiver'
+                st.level = ComponentStatus.STALE if self.stale else ComponentStatus.OK
+                self.status_pub.publish(st)
+            r.sleep()
+
+
+class TeleopLoopTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('teleop_loop_test')
+        cls.fx = Fixture()
+        cls.delay = rospy.get_param('~expect_delay', 0.0)
+
+    def wait_for(self, cond, timeout, what):
+        end = time.time() + timeout
+        while time.time() < end and not rospy.is_shutdown():
+            if cond():
+                return
+            time.sleep(0.05)
+        self.fail('timed out waiting for ' + what)
+
+    def test_loop(self):
+        fx = self.fx
+        self.wait_for(lambda: len(fx.targets) > 100, 30.0, '/mesa_left/target_pose')
+        time.sleep(8.0)  # two master periods
+        with fx.lock:
+            targets = list(fx.targets)
+            master = list(fx.master_log)
+            wrenches = list(fx.wrenches)
+            e_m = list(fx.energy['master'])
+            e_s = list(fx.energy['slave'])
+        # set-points: frame, rate, finite
+        self.assertEqual(targets[-1][5], 'mesa_left/sbs_world')
+        span = targets[-1][0] - targets[-1000][0]
+        rate = 999.0 / span
+        rospy.loginfo('target_pose rate %.0f Hz', rate)
+        # the set-point follows each master sample (500 Hz here) and is republished after 1.5 ms
+        # without one; rospy on a loaded 2-core machine is no rate meter (bench/run measures it)
+        self.assertGreater(rate, 400.0)
+        # tracking: the slave base is rotated -90 deg about z with respect to the console, so master +x
+        # (touch base) is slave +y; the set-point displacement is SCALE * master displacement, delayed
+        x0, y0 = targets[0][3], targets[0][2]
+        tm = [m[0] for m in master]
+        errs = []
+        import bisect
+        m_first = master[bisect.bisect_left(tm, targets[0][0] - self.delay)][1]
+        for (tr, _, x, y, z, _f) in targets[-4000:]:
+            i = bisect.bisect_left(tm, tr - self.delay) - 1
+            if i <= 0:
+                continue
+            expected = SCALE * (master[i][1] - m_first)
+            errs.append((y - x0) - expected)  # slave y follows master x
+        errs = errs[len(errs) // 4:]
+        mean = sum(errs) / len(errs)   # constant offset = where the integration started: legitimate
+        rms = math.sqrt(sum((e - mean) ** 2 for e in errs) / len(errs))
+        span_y = max(t[3] for t in targets[-4000:]) - min(t[3] for t in targets[-4000:])
+        rospy.loginfo('tracking rms %.2f mm over a %.1f mm stroke', rms * 1e3, span_y * 1e3)
+        # it moved with the master (velocity integration: gaps > max_step in this Python-driven master
+        # stream are not integrated, so a few % of stroke can be lost on a loaded machine)
+        self.assertGreater(span_y, 0.7 * 2 * SCALE * AMP)
+        self.assertLess(span_y, 1.1 * 2 * SCALE * AMP)
+        self.assertLess(rms, 0.004)                          # within 4 mm incl. ROS timing (offset-free)
+        # force command: in the device frame, finite and within the device limit
+        self.assertGreater(len(wrenches), 1000)
+        self.assertEqual(wrenches[-1][0], 'touch_left/base')
+        for w in wrenches[-1000:]:
+            n = math.sqrt(w[1] ** 2 + w[2] ** 2 + w[3] ** 2)
+            self.assertTrue(math.isfinite(n) and n <= 3.3 + 1e-6)
+        # tanks: published, within bounds
+        self.assertGreater(len(e_m), 1000)
+        self.assertGreater(len(e_s), 1000)
+        self.assertTrue(all(1.0 <= e <= 20.0 for e in e_m + e_s))
+
+        # bad input: NaN contact force, NaN tank wrench, NaN master pose -> nodes survive, counters rise
+        nan = float('nan')
+        tw = Twist()
+        tw.linear.x = nan
+        fx.force_pub.publish(tw)
+        w = WrenchStamped()
+        w.wrench.force.x = nan
+        fx.tank_pub.publish(w)
+        fx.nan_stylus = True
+        time.sleep(0.5)
+        fx.nan_stylus = False
+        time.sleep(1.5)
+        with fx.lock:
+            last = list(fx.targets[-200:])
+            status = list(fx.status)
+        self.assertTrue(all(math.isfinite(t[2]) and math.isfinite(t[3]) for t in last))
+        rejected = {}
+        for comp, _lvl, rej in status:
+            rejected[comp] = max(rejected.get(comp, 0), rej)
+        rospy.loginfo('rejected counters: %s', rejected)
+        self.assertGreater(rejected.get('teleop/tank_slave', 0), 0)
+        self.assertGreater(sum(v for k, v in rejected.items() if k.startswith('teleop/tf_transformer')), 0)
+
+        # stale master link: the set-point holds although the master keeps moving
+        fx.stale = True
+        time.sleep(0.5)
+        with fx.lock:
+            n0 = len(fx.targets)
+        time.sleep(2.0)
+        with fx.lock:
+            held = list(fx.targets[n0:])
+        self.assertGreater(len(held), 1000)   # still published at rate
+        ys = [t[3] for t in held]
+        self.assertLess(max(ys) - min(ys), 1e-9)
+        fx.stale = False
+        time.sleep(2.0)
+        with fx.lock:
+            moving = [t[3] for t in fx.targets[-1000:]]
+        self.assertGreater(max(moving) - min(moving), 1e-3)  # resumed (re-indexed, no jump check below)
+        fx.run = False
+
+    def test_bad_parameter_exits_with_message(self):
+        p = subprocess.run(['rosrun', 'saras_teleop', 'tank_master', '__name:=bad_tank', '_T_req:=0.5'],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=20)
+        out = p.stdout.decode(errors='replace')
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn('T_req', out)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('saras_teleop', 'teleop_loop_test', TeleopLoopTest, sys.argv)
