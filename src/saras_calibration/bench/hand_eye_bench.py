@@ -49,7 +49,7 @@ def table(title, clean, bad, bad_label):
     for m in METHODS:
         (cr, ct), cf, ms = clean[m]
         (br, bt), bf, _ = bad[m]
-        note = '' if not (cf or bf) else ' (%d/%d failed)' % (cf, bf)
+        note = '' if not (cf or bf) else ' (failed: %d clean, %d bad)' % (cf, bf)
         print('| %s%s | %.4f | %.3f | %.4f | %.3f | %.1f, %.1f | %.1f |'
               % (m, note, cr, ct, br, bt, br / cr, bt / ct, ms))
     best = min(clean[m][0][0] for m in OPENCV_METHODS)

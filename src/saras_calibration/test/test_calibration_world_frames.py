@@ -61,3 +61,16 @@ def test_transform_helpers():
         validate_transform(np.eye(3))
     with pytest.raises(NonRigidTransformError, match='zero'):
         transform_from_quaternion([0, 0, 0], [0, 0, 0, 0])
+
+
+def test_hand_eye_file_loads_in_saras_description(tmp_path):
+    """The hand-eye file we write is the one the ECM URDF generator reads."""
+    config = pytest.importorskip('saras_description.config')
+    X = transform_from_rpy([-0.002, 0.001, 0.004], [0.01, 0.52, -0.02])
+    T_lr = transform_from_rpy([0.005, 0.0, 0.0001], [0.0, -0.003, 0.0])
+    p = tmp_path / 'ecm_hand_eye.yaml'
+    save_world_frames(str(p), [frame_entry('ECM/tool_tip', 'endoscope/left_optical_frame', X),
+                               frame_entry('endoscope/left_optical_frame', 'endoscope/right_optical_frame', T_lr)])
+    he = config.load_hand_eye(str(p))
+    np.testing.assert_allclose(he.tip_to_left, X, atol=1e-6)
+    np.testing.assert_allclose(he.left_to_right, T_lr, atol=1e-6)

@@ -7,7 +7,7 @@ surgical site (retropubic space / prostate). Units: metres (scaling 1.0). Vertex
 saras_collision/geometry.h. Dimensions are rounded adult averages, enough to give the tools
 realistic warnings near the pubic symphysis and the pubic rami.
 
-Usage: doc/make_pelvis_vertices.py > config/pelvis_vertices.txt
+Usage: python3 doc/make_pelvis_vertices.py > config/pelvis_vertices.txt
 """
 import math
 

@@ -321,8 +321,7 @@ void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
     last_marker_time_ = wall;
     publishMarkers(now);
   }
-  std::string message;
-  if (computeLevel(message) != last_level_)
+  if (computeLevel(nullptr) != last_level_)  // no allocation on the cycle path
     publishStatus(now);
 }
 
@@ -412,24 +411,32 @@ void CollidingRegions::publishMarkers(const ros::Time& now)
   markers_pub_.publish(markers_msg_);
 }
 
-uint8_t CollidingRegions::computeLevel(std::string& message) const
+uint8_t CollidingRegions::computeLevel(std::string* message) const
 {
   if (!have_bones_)
   {
-    message = "no TF " + config_.world_frame + " -> " + config_.bones_frame + ": bones left out";
+    if (message != nullptr)
+      *message = "no TF " + config_.world_frame + " -> " + config_.bones_frame + ": bones left out";
     return saras_msgs::ComponentStatus::WARN;
   }
-  std::string missing;
+  bool all_valid = true;
   for (std::size_t i = 0; i < tools_.size(); ++i)
-    if (!scene_.toolValid(i))
-      missing += (missing.empty() ? "" : ", ") + config_.tools[i].name;
-  if (!missing.empty())
+    all_valid = all_valid && scene_.toolValid(i);
+  if (all_valid)
   {
-    message = "no valid pose/TF for: " + missing;
-    return saras_msgs::ComponentStatus::WARN;
+    if (message != nullptr)
+      *message = "ok";
+    return saras_msgs::ComponentStatus::OK;
   }
-  message = "ok";
-  return saras_msgs::ComponentStatus::OK;
+  if (message != nullptr)
+  {
+    std::string missing;
+    for (std::size_t i = 0; i < tools_.size(); ++i)
+      if (!scene_.toolValid(i))
+        missing += (missing.empty() ? "" : ", ") + config_.tools[i].name;
+    *message = "no valid pose/TF for: " + missing;
+  }
+  return saras_msgs::ComponentStatus::WARN;
 }
 
 void CollidingRegions::publishStatus(const ros::Time& now)
@@ -437,7 +444,7 @@ void CollidingRegions::publishStatus(const ros::Time& now)
   saras_msgs::ComponentStatus s;
   s.header.stamp = now;
   s.component = "colliding_regions";
-  s.level = computeLevel(s.message);
+  s.level = computeLevel(&s.message);
   last_level_ = s.level;
   double age = 0.0;
   for (const ToolState& t : tools_)

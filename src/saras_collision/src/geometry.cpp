@@ -244,16 +244,17 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
         parallel = true;
         s = 0.0;  // any s is optimal up to the clamping of t, fixed below
       }
+      const double inv_a = 1.0 / a;  // independent of the chain above: overlaps with it
       t = (b * s + f) / e;
       if (t < 0.0)
       {
         t = 0.0;
-        s = clamp01(-c / a);
+        s = clamp01(-c * inv_a);
       }
       else if (t > 1.0)
       {
         t = 1.0;
-        s = clamp01((b - c) / a);
+        s = clamp01((b - c) * inv_a);
       }
     }
   }
@@ -266,7 +267,7 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
   out.distance = axis - r1 - r2;
   out.code = classify(out.distance, parallel);
   if (axis > 0.0)
-    out.normal = v / axis;
+    out.normal = v * (1.0 / axis);
   else if (!point1 && !point2 && !parallel)
     out.normal = d1.cross(d2).normalized();
   else if (!point1)
@@ -306,6 +307,25 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   const Eigen::Matrix3d& R = box.axes;
   const Eigen::Vector3d& h = box.half;
   const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
+  if (p1 == p2)
+  {
+    // Sphere: closest box point = clamped centre (the general path below gives the same).
+    const Eigen::Vector3d q(clampTo(a[0], h[0]), clampTo(a[1], h[1]), clampTo(a[2], h[2]));
+    const Eigen::Vector3d v = a - q;
+    const double axis2 = v.squaredNorm();
+    if (axis2 > kTangentTolerance * kTangentTolerance)
+    {
+      const double axis = std::sqrt(axis2);
+      DistanceResult out;
+      out.distance = axis - r;
+      out.code = classify(out.distance, false);
+      const Eigen::Vector3d v_world = R * v;
+      out.normal = v_world * (1.0 / axis);
+      out.point2 = p1 - v_world;
+      out.point1 = out.code == kIntersecting ? p1 : Eigen::Vector3d(p1 - r * out.normal);
+      return out;
+    }
+  }
   const Eigen::Vector3d d = p1 == p2 ? Eigen::Vector3d::Zero().eval() : (R.transpose() * (p2 - p1)).eval();
 
   auto slope = [&](double t) {

@@ -120,3 +120,26 @@ def test_scripted_motion_is_smooth_and_bounded():
         clutch_seen |= it.clutch
         prev = it
     assert clutch_seen
+
+
+class _Msg(object):
+    """Duck-typed HapticDeviceState (no ROS import in core tests)."""
+
+    class _V(object):
+        def __init__(self, **kw):
+            self.__dict__.update(kw)
+
+    def __init__(self, x, clip, stale=False):
+        self.pose = self._V(position=self._V(x=x, y=0.0, z=0.1),
+                            orientation=self._V(x=0.0, y=0.0, z=0.0, w=1.0))
+        self.clip_angle, self.clutch, self.clip_button, self.stale = clip, False, True, stale
+
+
+def test_replay_from_recorded_states():
+    msgs = [(10.0, _Msg(0.0, 0.0)), (10.5, _Msg(9.0, 9.0, stale=True)), (11.0, _Msg(0.1, 0.4)),
+            (11.0, _Msg(5.0, 5.0)), (12.0, _Msg(0.0, 0.0))]
+    rep = TrajectoryReplay.from_states(msgs, loop=False)
+    assert rep.duration == 2.0
+    it = rep(0.5)
+    assert it.position == pytest.approx((0.05, 0.0, 0.1)) and it.clip_raw == pytest.approx(0.2)
+    assert it.clip_button

@@ -8,9 +8,13 @@
 #include <stdexcept>
 
 #include <boost/bind/bind.hpp>
+#include <boost/make_shared.hpp>
 #include <cv_bridge/cv_bridge.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
 #include <saras_msgs/ComponentStatus.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2/LinearMath/Transform.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
@@ -101,6 +105,9 @@ void VisualFeedbackNodelet::readParameters()
   pose_timeout_ = readPositive(pnh, "pose_timeout", 0.5, "[s]");
   distances_timeout_ = readPositive(pnh, "distances_timeout", 0.5, "[s]");
   image_timeout_ = readPositive(pnh, "image_timeout", 1.0, "[s]");
+  pnh.param("jpeg_quality", jpeg_quality_, 80);
+  if (jpeg_quality_ < 1 || jpeg_quality_ > 100)
+    throw paramError("jpeg_quality", "must be in [1, 100], got " + std::to_string(jpeg_quality_));
   pnh.param("queue_size", queue_size_, 3);
   if (queue_size_ < 1)
     throw paramError("queue_size", "must be >= 1");
@@ -168,7 +175,9 @@ void VisualFeedbackNodelet::onInit()
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   tf_buffer_.reset(new tf2_ros::Buffer(ros::Duration(10.0)));
   tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh));
-  it_ = std::make_shared<image_transport::ImageTransport>(nh);
+  // Multi-threaded handle: the two eyes are processed in parallel (each eye's callback is
+  // serialised by its own mutex, as image and camera_info may complete a pair from two threads).
+  it_ = std::make_shared<image_transport::ImageTransport>(getMTNodeHandle());
   eyes_[0].name = "left";
   eyes_[1].name = "right";
 
@@ -206,8 +215,15 @@ void VisualFeedbackNodelet::onInit()
   // Advertise under connect_mutex_ so that connectCb cannot run before the publishers exist.
   std::lock_guard<std::mutex> lock(connect_mutex_);
   image_transport::SubscriberStatusCallback cb = boost::bind(&VisualFeedbackNodelet::connectCb, this);
+  ros::SubscriberStatusCallback ros_cb = boost::bind(&VisualFeedbackNodelet::connectCb, this);
   for (Eye& eye : eyes_)
+  {
     eye.pub = it_->advertise(eye.name + "/image", 1, cb, cb);
+    // JPEG stream for remote viewers (what compressed_image_transport would publish; that plugin
+    // is not packaged in Debian). Encoded only while subscribed.
+    eye.compressed_pub = getMTNodeHandle().advertise<sensor_msgs::CompressedImage>(eye.pub.getTopic() + "/compressed",
+                                                                                   1, ros_cb, ros_cb);
+  }
   NODELET_INFO("VisualFeedback ready: %zu tools, thresholds collision %.4f m, warning %.4f m (lazy: waiting for "
                "subscribers of %s and %s)",
                tools_.size(), style_.collision_threshold, style_.warning_threshold, eyes_[0].pub.getTopic().c_str(),
@@ -222,7 +238,7 @@ void VisualFeedbackNodelet::connectCb()
   for (std::size_t i = 0; i < eyes_.size(); ++i)
   {
     Eye& eye = eyes_[i];
-    if (eye.pub.getNumSubscribers() == 0)
+    if (eye.pub.getNumSubscribers() == 0 && eye.compressed_pub.getNumSubscribers() == 0)
     {
       if (eye.sub)
       {
@@ -380,6 +396,7 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
   timespec c0;
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
   Eye& eye = eyes_[eye_index];
+  std::lock_guard<std::mutex> eye_lock(eye.mutex);
   ++eye.received;
   eye.last_image_ns = static_cast<std::int64_t>(ros::WallTime::now().toNSec());
 
@@ -547,7 +564,24 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
       overlays[i].visible = false;
     drawOverlay(canvas, order, placeholder, style, overlays.data(), n, nullptr, line.c_str(), &eye.hud);
   }
-  eye.pub.publish(sensor_msgs::ImageConstPtr(out_msg));
+  if (eye.pub.getNumSubscribers() > 0)
+    eye.pub.publish(sensor_msgs::ImageConstPtr(out_msg));
+  if (eye.compressed_pub.getNumSubscribers() > 0)
+  {
+    cv::Mat bgr = canvas;
+    if (canvas.channels() == 4)
+      cv::cvtColor(canvas, eye.jpeg_bgr, order == ChannelOrder::kRgb ? cv::COLOR_RGBA2BGR : cv::COLOR_BGRA2BGR);
+    else if (order == ChannelOrder::kRgb)
+      cv::cvtColor(canvas, eye.jpeg_bgr, cv::COLOR_RGB2BGR);
+    if (canvas.channels() == 4 || order == ChannelOrder::kRgb)
+      bgr = eye.jpeg_bgr;
+    sensor_msgs::CompressedImagePtr jpeg = boost::make_shared<sensor_msgs::CompressedImage>();
+    jpeg->header = out_msg->header;
+    jpeg->format = out_msg->encoding + "; jpeg compressed bgr8";
+    const std::vector<int> params{cv::IMWRITE_JPEG_QUALITY, jpeg_quality_};
+    if (cv::imencode(".jpg", bgr, jpeg->data, params))
+      eye.compressed_pub.publish(jpeg);
+  }
   ++eye.published;
   const auto ns = static_cast<std::uint64_t>(
       std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
@@ -573,7 +607,7 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
     rejected += e.rejected;
     tf_failures += e.tf_failures;
     last_ns = std::max(last_ns, e.last_image_ns.load());
-    subscribed = subscribed || e.pub.getNumSubscribers() > 0;
+    subscribed = subscribed || e.pub.getNumSubscribers() > 0 || e.compressed_pub.getNumSubscribers() > 0;
   }
   {
     std::lock_guard<std::mutex> lock(state_mutex_);

@@ -19,7 +19,7 @@ from sensor_msgs.msg import CameraInfo
 from saras_calibration.ros_io import matrix_to_transform
 from saras_calibration.transforms import make_transform, transform_from_rpy
 
-OUT = '/tmp/saras_calibration_rostest_sim_stereo'
+OUT = None   # ~output_dir of the test node (set in the .test file)
 BOARD_CENTRE = np.array([0.0, 0.02, 0.085]) + transform_from_rpy([0, 0, 0], [np.pi, 0, 0.3])[:3, :3] @ [0.028, 0.020, 0.0]
 
 
@@ -70,5 +70,6 @@ class EndoscopeSimStereoTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('endoscope_sim_stereo_test')
+    OUT = rospy.get_param('~output_dir')
     shutil.rmtree(OUT, ignore_errors=True)
     rostest.rosrun('saras_calibration', 'endoscope_sim_stereo', EndoscopeSimStereoTest)

@@ -16,7 +16,7 @@ from saras_calibration.transforms import (inverse, quaternion_from_transform, ro
                                           transform_from_rpy, transform_points)
 from saras_calibration.world_frames import entry_transform, load_world_frames
 
-OUT = '/tmp/saras_calibration_rostest_world_frames.yaml'
+OUT = None   # ~output_file of the test node (set in the .test file)
 T_WP = transform_from_rpy([0.05, 0.0, 0.07], [np.pi, 0.0, 0.2])
 TRUTH = {'PSM1': transform_from_rpy([0.10, -0.08, 0.22], [0.0, 0.0, 0.0]),
          'mesa_left/sbs_world': transform_from_rpy([0.0, 0.45, 0.0], [0.0, 0.0, -np.pi / 2]),
@@ -106,4 +106,5 @@ class GlobalRegistrationNodeTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('global_frame_registration_node_test')
+    OUT = rospy.get_param('~output_file')
     rostest.rosrun('saras_calibration', 'global_frame_registration_node', GlobalRegistrationNodeTest)

@@ -14,7 +14,7 @@ from saras_calibration.transforms import inverse, quaternion_from_transform, rot
 from saras_calibration.world_frames import entry_transform, load_world_frames
 from saras_msgs.srv import RemoveSample
 
-OUT = '/tmp/saras_calibration_rostest_hand_eye.yaml'
+OUT = None   # ~output_file of the test node (set in the .test file)
 
 
 def pose_msg(T, frame):
@@ -88,4 +88,5 @@ class HandEyeNodeTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('hand_eye_node_test')
+    OUT = rospy.get_param('~output_file')
     rostest.rosrun('saras_calibration', 'hand_eye_node', HandEyeNodeTest)

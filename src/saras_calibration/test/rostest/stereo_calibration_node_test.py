@@ -15,7 +15,7 @@ from saras_calibration.synthetic import checkerboard_views, render_checkerboard
 from saras_calibration.transforms import make_transform
 from saras_calibration.world_frames import entry_transform, load_world_frames
 
-OUT = '/tmp/saras_calibration_rostest_stereo'
+OUT = None   # ~output_dir of the test node (set in the .test file)
 K = np.array([[700.0, 0, 322.0], [0, 705.0, 236.0], [0, 0, 1]])
 D = np.array([-0.12, 0.05, 0.001, -0.0005, 0.0])
 
@@ -23,7 +23,7 @@ D = np.array([-0.12, 0.05, 0.001, -0.0005, 0.0])
 class StereoCalibrationNodeTest(unittest.TestCase):
     def test_calibration_files(self):
         rng = np.random.default_rng(1)
-        views = checkerboard_views(rng, 22, 8, 6, 0.005, distance=(0.05, 0.09), spread=0.01)
+        views = checkerboard_views(rng, 16, 8, 6, 0.005, distance=(0.05, 0.09), spread=0.01)
         T_rl = make_transform(None, [-0.005, 0.0, 0.0])
         br = CvBridge()
         pairs = [(br.cv2_to_imgmsg(render_checkerboard(K, D, (640, 480), T, 8, 6, 0.005), 'mono8'),
@@ -48,7 +48,7 @@ class StereoCalibrationNodeTest(unittest.TestCase):
                 pl.publish(l)
                 pr.publish(r)
             i += 1
-            rospy.sleep(0.15)
+            rospy.sleep(0.1)
         rospy.sleep(0.5)
         self.assertTrue(os.path.exists(report), 'no report written')
         rep = yaml.safe_load(open(report))
@@ -67,5 +67,6 @@ class StereoCalibrationNodeTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('stereo_calibration_node_test')
+    OUT = rospy.get_param('~output_dir')
     shutil.rmtree(OUT, ignore_errors=True)
     rostest.rosrun('saras_calibration', 'stereo_calibration_node', StereoCalibrationNodeTest)

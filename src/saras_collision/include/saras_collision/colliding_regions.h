@@ -95,7 +95,8 @@ private:
   void updateBones();
   void publishMarkers(const ros::Time& now);
   void publishStatus(const ros::Time& now);
-  uint8_t computeLevel(std::string& message) const;
+  /// Health level; the human-readable reason is built only if @p message is not null.
+  uint8_t computeLevel(std::string* message) const;
 
   ros::NodeHandle nh_;
   CollidingRegionsConfig config_;

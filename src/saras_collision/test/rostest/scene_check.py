@@ -3,7 +3,7 @@
 
 Publishes tool-tip poses (SARAS tips in mesa_<side>/sbs_world, PSM tips in PSM<n>), leaves PSM2
 without data, and checks /collision/distances, /collision/report, /collision/markers, the
-virtual-fixture wrench and the /saras/status heartbeat against references computed here from
+virtual-fixture wrench, the /saras/status heartbeat and a moved bone marker against references computed here from
 the known scene geometry (exact convex minimisation by ternary search, independent of the C++
 library).
 """
@@ -12,8 +12,9 @@ import unittest
 
 import numpy as np
 import rospy
+import tf2_ros
 import rostest
-from geometry_msgs.msg import PoseStamped, WrenchStamped
+from geometry_msgs.msg import PoseStamped, TransformStamped, WrenchStamped
 from saras_msgs.msg import CollisionReport, ComponentStatus
 from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import MarkerArray
@@ -172,6 +173,21 @@ class SceneCheck(unittest.TestCase):
         mine = [s for s in self.status if s.component == "colliding_regions"]
         self.assertTrue(mine)
         self.assertGreater(mine[-1].rejected, 0)
+
+        # The bone marker moves 10 mm towards the feet (new static TF): the node follows it without
+        # restart; mesa_left is now 17.5 mm from the bone and the fixture force is 200 * 2.5 mm.
+        t = TransformStamped()
+        t.header.stamp = rospy.Time.now()
+        t.header.frame_id = "world"
+        t.child_frame_id = "bones_marker_frame"
+        t.transform.translation.x, t.transform.translation.z = -0.01, 0.10
+        t.transform.rotation.w = 1.0
+        broadcaster = tf2_ros.StaticTransformBroadcaster()
+        broadcaster.sendTransform(t)
+        self.spin_publishing(1.5)
+        self.assertAlmostEqual(self.distances.data[0], 0.0175, delta=1e-9)
+        self.assertEqual(self.report.tools[0].nearest_object, "bone_0")
+        self.assertAlmostEqual(self.wrench.wrench.force.y, 0.5, delta=1e-9)
 
         # Inputs stop: after ~pose_timeout every tool is stale (NaN) and the fixture releases.
         rospy.sleep(1.0)

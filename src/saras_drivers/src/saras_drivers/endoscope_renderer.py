@@ -341,6 +341,7 @@ class SceneRenderer(object):
         self.cam = camera
         self.surface = surface
         self.rays = camera.pixel_rays()
+        self.ray_norm = np.linalg.norm(self.rays, axis=2)
         self.rays_lo = camera.pixel_rays(int(tissue_subsample))
         self.fov = camera.field_of_view_bounds()
         self.iterations = int(tissue_iterations)
@@ -501,28 +502,30 @@ class SceneRenderer(object):
             poly = np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)
             cv2.fillPoly(mask, [poly], 255, cv2.LINE_8, 4)
             # conservative candidate set; the exact in-face test below decides edge pixels
-            ys, xs = np.nonzero(cv2.dilate(mask, np.ones((3, 3), np.uint8)))
-            if len(ys) == 0:
-                continue
-            ys = ys + y0
-            xs = xs + x0
-            d = self.rays[ys, xs] @ R.T  # world ray directions (float32)
-            nd = d @ n.astype(np.float32)
+            cand = cv2.dilate(mask, np.ones((3, 3), np.uint8)) > 0
+            # Dense over the face's rectangle, in the camera frame (ray = (x, y, 1), t = depth).
+            Rt = R.T.astype(np.float64)
+            nc, ajc, akc = Rt @ n, Rt @ aj, Rt @ ak
+            rel = Rt @ (o64 - fc)
+            rx, ry = self.rays[y0:y1, x0:x1, 0], self.rays[y0:y1, x0:x1, 1]
+            nd = rx * np.float32(nc[0]) + ry * np.float32(nc[1]) + np.float32(nc[2])
             with np.errstate(divide='ignore', invalid='ignore'):
-                t = np.float32(np.dot(n, fc - o64)) / nd
-            ok = (nd < 0) & (t > 0) & (t < depth[ys, xs])
-            rel = o.astype(np.float32) - fc.astype(np.float32)
-            p = rel + t[:, None] * d  # hit point relative to the face centre
-            ok &= (np.abs(p @ aj.astype(np.float32)) <= hj * (1 + 1e-5)) & \
-                (np.abs(p @ ak.astype(np.float32)) <= hk * (1 + 1e-5))
+                t = np.float32(-np.dot(nc, rel)) / nd
+            dsub = depth[y0:y1, x0:x1]
+            ok = cand & (nd < 0) & (t > 0) & (t < dsub)
+            u = np.float32(rel @ ajc) + t * (rx * np.float32(ajc[0]) + ry * np.float32(ajc[1]) +
+                                             np.float32(ajc[2]))
+            v = np.float32(rel @ akc) + t * (rx * np.float32(akc[0]) + ry * np.float32(akc[1]) +
+                                             np.float32(akc[2]))
+            ok &= (np.abs(u) <= hj * (1 + 1e-5)) & (np.abs(v) <= hk * (1 + 1e-5))
             if not np.any(ok):
                 continue
-            ys, xs, t, d, nd = ys[ok], xs[ok], t[ok], d[ok], nd[ok]
-            dn = np.linalg.norm(d, axis=1)
-            cosang = -nd / dn
+            dn = self.ray_norm[y0:y1, x0:x1]
             fall = np.clip((self.light_distance / np.maximum(t * dn, 1e-3)) ** 1.5, 0.3, 1.3)
-            img[ys, xs] = np.clip(bone * ((0.25 + 0.75 * cosang) * fall)[:, None], 0, 255).astype(np.uint8)
-            depth[ys, xs] = t
+            shade = np.clip((0.25 + 0.75 * (-nd / dn)) * fall, 0.0, 1.3)
+            colour = cv2.merge([np.clip(c * shade, 0, 255).astype(np.uint8) for c in bone])
+            np.copyto(img[y0:y1, x0:x1], colour, where=ok[..., None])
+            np.copyto(dsub, t, where=ok)
 
     def _render_target(self, img, depth, T_world_cam, R, o):
         tgt, T_wb = self.target

@@ -142,6 +142,23 @@ class TrajectoryReplay(object):
                          a.clip_raw + s * (b.clip_raw - a.clip_raw), a.clutch, a.clip_button)
 
     @classmethod
+    def from_states(cls, stamped_states, loop=True):
+        """Build a replay from recorded ``saras_msgs/HapticDeviceState``-like objects.
+
+        :param stamped_states: iterable of (t [s], msg) with msg.pose, msg.clip_angle, msg.clutch,
+            msg.clip_button (duck-typed, so no ROS import here). Stale states and non-increasing
+            times are skipped; the recorded clip angle is replayed as the raw clip reading.
+        """
+        samples = []
+        for t, m in stamped_states:
+            if getattr(m, 'stale', False) or (samples and t <= samples[-1][0]):
+                continue
+            p, q = m.pose.position, m.pose.orientation
+            samples.append((t, Intention((p.x, p.y, p.z), (q.x, q.y, q.z, q.w), m.clip_angle,
+                                         m.clutch, m.clip_button)))
+        return cls(samples, loop)
+
+    @classmethod
     def from_csv(cls, path, side, loop=True):
         """Load a CSV with header ``t`` and ``<side>_<field>`` for field in :data:`CSV_FIELDS`.
 

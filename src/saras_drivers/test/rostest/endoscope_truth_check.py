@@ -13,6 +13,7 @@ import rospy
 import rostest
 import tf2_ros
 from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import String
 
 from saras_drivers import rigid
 
@@ -73,6 +74,14 @@ class TruthTest(unittest.TestCase):
                 self.assertLess(err.max(), 1.0)
                 checked += 1
         self.assertEqual(checked, 6)
+        # the target is shown on request only: hide it through ~target
+        pub = rospy.Publisher('/endoscope/endoscope_sim/target', String, queue_size=1, latch=True)
+        pub.publish(String('none'))
+        rospy.sleep(1.0)
+        img_msg = rospy.wait_for_message('/endoscope/left/image_raw', Image, 30.0)
+        img = np.frombuffer(img_msg.data, np.uint8).reshape(img_msg.height, img_msg.width, 3)
+        ok, _ = cv2.findChessboardCorners(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY), (cols, rows))
+        self.assertFalse(ok)
 
 
 if __name__ == '__main__':

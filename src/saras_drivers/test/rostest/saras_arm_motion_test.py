@@ -152,6 +152,34 @@ class TestMotion(unittest.TestCase):
         self.assertTrue(warn, 'driver did not report the rejection')
         self.assertGreaterEqual(warn[-1].rejected, 1)
 
+    def test_6_bad_targets_dropped_by_driver(self):
+        t_p0 = time.monotonic()
+        p0, _ = self.tip()
+        goal = self.target_from_current(0.1, 0.13)
+        before = [s for s in self.status if s.component == 'mesa_left/saras_arms_driver'][-1].rejected
+        bad = []
+        for frame, pos, quat, age in (('mesa_right/sbs_world', goal, (0, 0, 0, 1), 0.0),   # wrong frame
+                                      (FRAME, (float('nan'), 0.0, 0.0), (0, 0, 0, 1), 0.0),  # NaN
+                                      (FRAME, goal, (0.0, 0.0, 0.5, 0.5), 0.0),          # non-unit quaternion
+                                      (FRAME, goal, (0, 0, 0, 1), 1.0)):                 # 1 s old
+            m = PoseStamped()
+            m.header.frame_id = frame
+            m.header.stamp = rospy.Time.now() - rospy.Duration(age)
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = pos
+            m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = quat
+            bad.append(m)
+        for m in bad:
+            self.pub.publish(m)
+            time.sleep(0.05)
+        time.sleep(1.5)
+        with self.lock:
+            recent = [m for t, m in self.poses if t >= t_p0]
+        moved = max(np.linalg.norm(np.array([m.pose.position.x, m.pose.position.y, m.pose.position.z]) - p0)
+                    for m in recent)
+        self.assertLess(moved, 1e-9)
+        after = [s for s in self.status if s.component == 'mesa_left/saras_arms_driver'][-1].rejected
+        self.assertEqual(after - before, 4)
+
     def test_5_clip(self):
         self.assertTrue(self.set_clip(0.4, float('nan')).success)
         end = time.monotonic() + 5.0

@@ -2,7 +2,8 @@
 """rostest (touchball_console_sim + touchball_receiver over real UDP): a force published on
 wrench_cmd travels back to the simulated console and moves the hand+device model by F/k
 (static deflection of the hand spring), on the commanded device only; when the commands stop,
-the device returns (console-side command timeout)."""
+the device returns (console-side command timeout). Also: touch_<side>/joint_states (touch_ik)
+reproduce the stylus pose through saras_description's forward kinematics."""
 import sys
 import threading
 import time
@@ -12,6 +13,10 @@ import numpy as np
 import rospy
 import rostest
 from geometry_msgs.msg import WrenchStamped
+from sensor_msgs.msg import JointState
+
+from saras_description import kinematics
+from saras_drivers.saras_arm_model import quat_to_matrix
 
 from saras_msgs.msg import HapticDeviceState
 
@@ -31,6 +36,14 @@ class TestLoop(unittest.TestCase):
         rospy.Subscriber('/touchball/left/state', HapticDeviceState, on_state, queue_size=5000)
         rospy.Subscriber('/touchball/right/state', HapticDeviceState, on_state, queue_size=5000)
         pub = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=10)
+        joints, poses = [], {}
+
+        def on_state_pose(msg):
+            if msg.device == 'left' and not msg.stale:
+                with lock:
+                    poses[msg.header.stamp.to_nsec()] = msg.pose
+        rospy.Subscriber('/touchball/left/state', HapticDeviceState, on_state_pose, queue_size=5000)
+        rospy.Subscriber('/touch_left/joint_states', JointState, joints.append, queue_size=100)
 
         def mean_z(side, t0, t1):
             with lock:
@@ -62,6 +75,21 @@ class TestLoop(unittest.TestCase):
         time.sleep(1.5)                                    # commands stopped: force times out
         t2 = time.monotonic()
         self.assertAlmostEqual(mean_z('left', t2 - 0.5, t2), base_l, delta=0.05 * FORCE / K_HAND)
+        # joint_states (published with the stamp of the packet they come from) => FK = stylus pose
+        self.assertEqual(joints[-1].name[0], 'touch_left/waist')
+        checked = 0
+        with lock:
+            for js in joints[-20:]:
+                pose = poses.get(js.header.stamp.to_nsec())
+                if pose is None:
+                    continue
+                t = kinematics.touch_handle_in_base(js.position)
+                p = pose.position
+                self.assertLess(np.linalg.norm(t[:3, 3] - [p.x, p.y, p.z]), 1e-9)
+                o = pose.orientation
+                self.assertLess(np.abs(t[:3, :3] - quat_to_matrix((o.x, o.y, o.z, o.w))).max(), 1e-9)
+                checked += 1
+        self.assertGreater(checked, 5)
 
 
 if __name__ == '__main__':

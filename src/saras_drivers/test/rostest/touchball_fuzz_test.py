@@ -10,7 +10,7 @@ import zlib
 
 import rospy
 import rostest
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PoseStamped, WrenchStamped
 
 from saras_drivers import touchball_protocol as tp
 from saras_msgs.msg import ComponentStatus
@@ -65,6 +65,36 @@ class TestFuzz(unittest.TestCase):
         console.send(2.0)
         time.sleep(0.3)
         self.assertEqual(len(poses), 6)
+        # bad force commands (NaN, wrong frame) => zero force, counted; a good one goes through
+        wrench = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=10)
+        time.sleep(1.0)
+        rejected_before = status[-1].rejected
+
+        def command_after(force, frame):
+            # the latch drops commands older than 100 ms: keep publishing while packets flow
+            w = WrenchStamped()
+            w.header.frame_id = frame
+            w.wrench.force.x = force
+            n = len(console.commands)
+            for _ in range(30):
+                w.header.stamp = rospy.Time.now()
+                wrench.publish(w)
+                time.sleep(0.005)
+                console.send(3.0 + 0.001 * console.seq)
+                time.sleep(0.005)
+            time.sleep(0.2)
+            self.assertEqual(len(console.commands), n + 30)
+            return tp.unpack_command(console.commands[-1][1]).devices[0]
+
+        good = command_after(1.5, 'touch_left/base')
+        self.assertTrue(good.enabled)
+        self.assertEqual(good.force, (1.5, 0.0, 0.0))
+        for force, frame in ((float('nan'), 'touch_left/base'), (1.5, 'touch_right/base')):
+            cmd = command_after(force, frame)
+            self.assertFalse(cmd.enabled)
+            self.assertEqual(cmd.force, (0.0, 0.0, 0.0))
+        time.sleep(0.3)
+        self.assertEqual(status[-1].rejected, rejected_before + 60)   # 30 NaN + 30 wrong frame
         console.close()
         foreign.close()
 

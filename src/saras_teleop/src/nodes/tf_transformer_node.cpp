@@ -14,6 +14,7 @@
  * Params: reference_frame, tracked_frame, device_base_frame, rate [Hz], low_pass_cutoff [Hz],
  * wait_timeout [s], stale_timeout [s], wrench_timeout [s], max_force [N], max_torque [N m].
  */
+#include <cmath>
 #include <string>
 
 #include <geometry_msgs/PoseStamped.h>
@@ -67,14 +68,21 @@ private:
   {
     for (const auto& t : m.transforms)
     {
-      bool ok = false;
-      try
+      const auto& tr = t.transform.translation;
+      const auto& rq = t.transform.rotation;
+      // checked here so that a NaN stream gives one throttled error instead of tf2's unthrottled one
+      bool ok = std::isfinite(tr.x) && std::isfinite(tr.y) && std::isfinite(tr.z) && std::isfinite(rq.x) &&
+                std::isfinite(rq.y) && std::isfinite(rq.z) && std::isfinite(rq.w);
+      if (ok)
       {
-        ok = buffer_.setTransform(t, "tf_transformer", is_static);  // false for NaN or empty frames
-      }
-      catch (const std::exception& e)
-      {
-        ok = false;
+        try
+        {
+          ok = buffer_.setTransform(t, "tf_transformer", is_static);  // false for empty/self frames
+        }
+        catch (const std::exception&)
+        {
+          ok = false;
+        }
       }
       if (!ok)
       {

@@ -45,9 +45,12 @@ private:
     std::string name;                          ///< "left" / "right"
     image_transport::CameraSubscriber sub;     ///< <name>/image_raw + <name>/camera_info
     image_transport::Publisher pub;            ///< <name>/image
+    ros::Publisher compressed_pub;             ///< <name>/image/compressed (JPEG, on demand)
+    cv::Mat jpeg_bgr;                          ///< colour-conversion buffer for the JPEG encoder
     ImagePool pool;                            ///< output buffers, reused once released
     HudCache hud;                              ///< rendered HUD text, redrawn on change only
-    CameraModel model;                         ///< touched only by this eye's (serialised) callback
+    std::mutex mutex;                          ///< serialises this eye's callback
+    CameraModel model;                         ///< touched only by this eye's callback
     sensor_msgs::CameraInfo last_info;         ///< calibration the model was built from
     bool info_seen = false;
     std::string model_error;                   ///< why the model is invalid ("" when valid)
@@ -110,6 +113,7 @@ private:
   double pose_timeout_ = 0.5;       ///< [s]
   double distances_timeout_ = 0.5;  ///< [s]
   double image_timeout_ = 1.0;      ///< [s] STALE heartbeat without images while subscribed
+  int jpeg_quality_ = 80;          ///< JPEG quality of the compressed stream [1, 100]
   int queue_size_ = 3;             ///< camera subscription queue [frames]
   std::string component_;
 

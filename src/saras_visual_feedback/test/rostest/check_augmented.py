@@ -4,6 +4,8 @@
 ~mode:
   nominal    augmented images at the input rate, one output per input, and each tool drawn in its
              region's colour at the pixel OpenCV's cv2.projectPoints predicts (distortion included)
+  rate       only the rate part of nominal (used with the real saras_drivers/endoscope_sim)
+  reconfigure  dynamic_reconfigure changes thresholds/colours live and refuses invalid requests
   bad_input  malformed images, NaN poses and short distance arrays: the nodelet keeps publishing
              and its heartbeat counts the rejections
   lazy       no camera/pose subscription while nobody listens; subscribes per eye on demand
@@ -82,6 +84,14 @@ class TestVisualFeedback(unittest.TestCase):
         getattr(self, 'scenario_' + self.mode)()
 
     def scenario_nominal(self):
+        outs = self.check_rate()
+        self.check_drawing(outs)
+
+    def scenario_rate(self):
+        """Output at the input rate (any image source, e.g. the real endoscope_sim)."""
+        self.check_rate()
+
+    def check_rate(self):
         outs = {e: Recorder('/visual_feedback/%s/image' % e) for e in EYES}
         self.assertTrue(wait_for(lambda: all(o.count > 5 for o in outs.values()), 20.0), 'no augmented images')
         ins = {e: Recorder('/endoscope/%s/image_raw' % e) for e in EYES}
@@ -102,7 +112,9 @@ class TestVisualFeedback(unittest.TestCase):
             with outs[e].lock, ins[e].lock:
                 common = outs[e].stamps & ins[e].stamps
             self.assertGreater(len(common), 0.9 * n_in)
+        return outs
 
+    def check_drawing(self, outs):
         for e in EYES:
             msg = outs[e].last
             self.assertEqual(msg.encoding, 'bgr8')
@@ -130,6 +142,36 @@ class TestVisualFeedback(unittest.TestCase):
             px = project(e, p)
             self.assertTrue(np.array_equal(img[int(round(px[1])), int(round(px[0]))], np.array([0, 0, 255], np.uint8)),
                             'shaft of mesa_left not drawn red at %s' % px)
+
+    def scenario_reconfigure(self):
+        """dynamic_reconfigure changes the thresholds and colours live; invalid requests are refused."""
+        from dynamic_reconfigure.client import Client
+        outs = {e: Recorder('/visual_feedback/%s/image' % e) for e in EYES}
+        self.assertTrue(wait_for(lambda: all(o.count > 5 for o in outs.values()), 20.0), 'no augmented images')
+        client = Client('/visual_feedback', timeout=10.0)
+
+        def colour_at(tool, eye='left'):
+            n = outs[eye].count
+            self.assertTrue(wait_for(lambda: outs[eye].count > n + 3, 5.0))  # frames drawn after the change
+            img = image_array(outs[eye].last)
+            px = project(eye, scene.TOOLS[tool][2])
+            b, g, r = img[int(round(px[1])), int(round(px[0]))]
+            return int(r), int(g), int(b)
+
+        time.sleep(1.5)  # first distances and poses in (lazily subscribed with the first viewer)
+        self.assertEqual(colour_at('mesa_right'), (255, 255, 0))  # 0.012 m: warning by default
+        cfg = client.update_configuration({'collision_threshold': 0.015, 'warning_threshold': 0.06})
+        self.assertAlmostEqual(cfg['collision_threshold'], 0.015)
+        self.assertEqual(colour_at('mesa_right'), (255, 0, 0))   # now a collision
+        self.assertEqual(colour_at('PSM1'), (255, 255, 0))       # 0.05 m: now a warning
+        # Invalid: warning below collision -> refused, the values in use are reported back.
+        cfg = client.update_configuration({'warning_threshold': 0.001})
+        self.assertAlmostEqual(cfg['warning_threshold'], 0.06)
+        self.assertEqual(colour_at('PSM1'), (255, 255, 0))
+        cfg = client.update_configuration({'collision_colour': 'not a colour'})
+        self.assertEqual(cfg['collision_colour'], '#ff0000')
+        client.update_configuration({'collision_colour': '#ff00ff'})
+        self.assertEqual(colour_at('mesa_right'), (255, 0, 255))
 
     def scenario_bad_input(self):
         statuses = []

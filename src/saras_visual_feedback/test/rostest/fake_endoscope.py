@@ -3,7 +3,9 @@
 tool poses and collision distances (see scene.py).
 
 Private parameters: ~rate [Hz] (image rate, default 30), ~bad_input (bool, default false: when
-true also publishes malformed images, NaN poses and short distance arrays between good ones).
+true also publishes malformed images, NaN poses and short distance arrays between good ones),
+~images (bool, default true: false publishes only TF, poses and distances, for use with the real
+saras_drivers/endoscope_sim).
 """
 import math
 
@@ -20,6 +22,7 @@ class FakeEndoscope:
     def __init__(self):
         self.rate = rospy.get_param('~rate', 30.0)
         self.bad_input = rospy.get_param('~bad_input', False)
+        self.images = rospy.get_param('~images', True)
         self.image_pubs = [rospy.Publisher('/endoscope/%s/image_raw' % e, Image, queue_size=2) for e in ('left', 'right')]
         self.info_pubs = [rospy.Publisher('/endoscope/%s/camera_info' % e, CameraInfo, queue_size=2)
                           for e in ('left', 'right')]
@@ -88,7 +91,8 @@ class FakeEndoscope:
         while not rospy.is_shutdown():
             if self.count % 2 == 0:
                 self.publish_state()
-            self.publish_images()
+            if self.images:
+                self.publish_images()
             self.count += 1
             try:
                 r.sleep()

@@ -22,6 +22,7 @@ FRAMES = {
     'mesa_left/rcm': ('world', (0.02, 0.13, 0.20), (0.0, 0.0, 0.0)),
     'mesa_right/rcm': ('world', (0.02, -0.13, 0.20), (0.0, 0.0, 0.0)),
     'PSM1': ('world', (0.10, -0.08, 0.22), (0.0, 0.0, 0.0)),
+    'bones_marker_frame': ('world', (0.0, 0.0, 0.10), (0.0, 0.0, 0.0)),  # for endoscope_sim's bones
 }
 
 # Tools: name -> (pose topic, pose frame, tip in world, distance [m] published for it, index)

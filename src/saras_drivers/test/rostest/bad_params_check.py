@@ -1,0 +1,34 @@
+#!/usr/bin/env python3
+"""rostest: dvrk_sim, endoscope_sim, contact_sim and microphone reject bad parameters at start-up
+with exit status 2 and a message naming the parameter."""
+import subprocess
+import sys
+import unittest
+
+import rospy
+import rostest
+
+CASES = [
+    ('dvrk_sim', ['_rate:=-5'], '~rate'),
+    ('dvrk_sim', ['_bag:=/nonexistent/x.bag'], '~bag'),
+    ('endoscope_sim', ['_fps:=0'], '~fps'),
+    ('endoscope_sim', ['_camera_info_dir:=/nonexistent'], 'camera_info'),
+    ('contact_sim', ['_rate:=0'], '~rate'),
+    ('microphone', ['_source:=pulse'], 'source'),
+    ('microphone', ['_chunk_ms:=0.01'], '~chunk_ms'),
+]
+
+
+class BadParamsTest(unittest.TestCase):
+    def test_bad_parameters_are_fatal_and_named(self):
+        for i, (node, args, needle) in enumerate(CASES):
+            p = subprocess.run(['rosrun', 'saras_drivers', node, '__name:=bad_%d' % i] + args,
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
+            out = p.stdout.decode('utf-8', 'replace')
+            self.assertEqual(p.returncode, 2, '%s %s: exit %d\n%s' % (node, args, p.returncode, out))
+            self.assertIn(needle, out, '%s %s: message does not name %s:\n%s' % (node, args, needle, out))
+
+
+if __name__ == '__main__':
+    rospy.init_node('bad_params_check')
+    rostest.rosrun('saras_drivers', 'bad_params', BadParamsTest, sys.argv)
