@@ -26,7 +26,8 @@ class SarasArmGeometry(object):
     """SARAS arm dimensions. Frames: see README (``sbs_world`` z up, PA straight up at zero)."""
 
     #: PA joints: (axis of the joint in its own frame, offset [m] of the joint frame from the
-    #: previous joint frame along the previous z). Axes alternate z, y (S-R-S 7-DOF layout).
+    #: previous joint frame along the previous z). Axes alternate z, y (S-R-S 7-DOF layout);
+    #: only z and y axes are supported by kinematics.saras_arm_flange_in_base.
     PA_JOINTS = (
         ((0.0, 0.0, 1.0), 0.10),   # pa_joint_1: column rotation, 10 cm above the rail clamp
         ((0.0, 1.0, 0.0), 0.22),   # pa_joint_2: shoulder

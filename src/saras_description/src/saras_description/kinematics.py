@@ -68,7 +68,18 @@ def pivot_tip(yaw, pitch, insertion, roll=0.0):
     :param roll: rotation about the instrument axis [rad]
     :returns: 4x4; z axis along the instrument into the patient.
     """
-    return rot_y(-yaw) @ rot_x(-pitch) @ rot_x(math.pi) @ trans(z=insertion) @ rot_z(roll)
+    # = rot_y(-yaw) @ rot_x(-pitch) @ rot_x(pi) @ trans(z=insertion) @ rot_z(roll), expanded.
+    ca, sa = math.cos(yaw), math.sin(yaw)
+    cb, sb = math.cos(pitch), math.sin(pitch)
+    cr, sr = math.cos(roll), math.sin(roll)
+    a0 = (ca, 0.0, sa)                  # columns of rot_y(-yaw) @ rot_x(pi - pitch)
+    a1 = (-sa * sb, -cb, ca * sb)
+    a2 = (sa * cb, -sb, -ca * cb)
+    return np.array([
+        [cr * a0[0] + sr * a1[0], cr * a1[0] - sr * a0[0], a2[0], insertion * a2[0]],
+        [cr * a0[1] + sr * a1[1], cr * a1[1] - sr * a0[1], a2[1], insertion * a2[1]],
+        [cr * a0[2] + sr * a1[2], cr * a1[2] - sr * a0[2], a2[2], insertion * a2[2]],
+        [0.0, 0.0, 0.0, 1.0]])
 
 
 def pivot_ik(position):
@@ -116,10 +127,21 @@ def saras_arm_joint_limits(prefix=''):
 def saras_arm_flange_in_base(pa_joints):
     """Positioning-arm flange in ``<p>sbs_world`` for the 7 PA joint values [rad]."""
     q = _vector(pa_joints, 7, 'saras_arm_flange_in_base')
+    # t = prod(trans(z=offset_i) @ rot(axis_i, q_i)) @ trans(z=flange), written out with Python
+    # floats (columns x, y, z and position p): ~20x faster than 4x4 numpy products.
+    x, y, z, p = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]
+    for (axis, offset), qi in zip(SarasArmGeometry.PA_JOINTS, q.tolist()):
+        p = [p[i] + offset * z[i] for i in range(3)]
+        c, s = math.cos(qi), math.sin(qi)
+        if axis[2] == 1.0:    # about z
+            x, y = [c * x[i] + s * y[i] for i in range(3)], [c * y[i] - s * x[i] for i in range(3)]
+        else:                 # about y
+            x, z = [c * x[i] - s * z[i] for i in range(3)], [s * x[i] + c * z[i] for i in range(3)]
+    f = SarasArmGeometry.FLANGE_OFFSET
     t = np.eye(4)
-    for (axis, offset), qi in zip(SarasArmGeometry.PA_JOINTS, q):
-        t = t @ trans(z=offset) @ axis_angle(axis, qi)
-    return t @ trans(z=SarasArmGeometry.FLANGE_OFFSET)
+    t[:3, 0], t[:3, 1], t[:3, 2] = x, y, z
+    t[:3, 3] = [p[i] + f * z[i] for i in range(3)]
+    return t
 
 
 def saras_arm_flange_to_rcm():

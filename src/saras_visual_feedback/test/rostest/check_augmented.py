@@ -22,7 +22,7 @@ import rosgraph
 import rospy
 import rostest
 from saras_msgs.msg import ComponentStatus
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage, Image
 
 import scene
 
@@ -86,6 +86,21 @@ class TestVisualFeedback(unittest.TestCase):
     def scenario_nominal(self):
         outs = self.check_rate()
         self.check_drawing(outs)
+        self.check_compressed()
+
+    def check_compressed(self):
+        """<eye>/image/compressed: JPEG of the augmented image, produced on demand."""
+        got = []
+        sub = rospy.Subscriber('/visual_feedback/left/image/compressed', CompressedImage, got.append, queue_size=5)
+        self.assertTrue(wait_for(lambda: len(got) > 3, 10.0), 'no compressed augmented image')
+        sub.unregister()
+        msg = got[-1]
+        self.assertEqual(msg.format, 'bgr8; jpeg compressed bgr8')
+        img = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
+        self.assertEqual(img.shape, (scene.HEIGHT, scene.WIDTH, 3))
+        px = project('left', scene.TOOLS['mesa_left'][2])
+        b, g, r = img[int(round(px[1])), int(round(px[0]))].astype(int)
+        self.assertTrue(r > 200 and g < 80 and b < 80, 'left tool tip not red in the JPEG: %s' % ((r, g, b),))
 
     def scenario_rate(self):
         """Output at the input rate (any image source, e.g. the real endoscope_sim)."""
@@ -211,6 +226,14 @@ class TestVisualFeedback(unittest.TestCase):
         self.assertTrue(wait_for(lambda: subscribers('/endoscope/left/image_raw') == [], 5.0),
                         'still subscribed to the camera after the last viewer left')
         self.assertTrue(wait_for(lambda: subscribers('/mesa_left/ee_pose') == [], 5.0))
+        # A viewer of the JPEG stream alone also wakes its camera up.
+        got = []
+        sub = rospy.Subscriber('/visual_feedback/right/image/compressed', CompressedImage, got.append, queue_size=2)
+        self.assertTrue(wait_for(lambda: len(got) > 3, 10.0), 'no compressed right image')
+        self.assertNotEqual(subscribers('/endoscope/right/image_raw'), [])
+        self.assertEqual(subscribers('/endoscope/left/image_raw'), [])
+        sub.unregister()
+        self.assertTrue(wait_for(lambda: subscribers('/endoscope/right/image_raw') == [], 5.0))
 
 
 if __name__ == '__main__':
