@@ -198,8 +198,9 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
 }
 
 // Segment-segment: minimise |p1 + s d1 - p3 - t d2|^2 over [0,1]^2 (convex quadratic).
-// Interior stationary point from the 2x2 normal equations (denominator |d1 x d2|^2, computed
-// without cancellation), clamped; then t is re-optimised for s and, if clamped, s for t.
+// Interior stationary point from the 2x2 normal equations (denominator |d1 x d2|^2, taken from
+// the cross product when nearly parallel to avoid cancellation), clamped; then t is
+// re-optimised for s and, if clamped, s for t.
 // Degenerate axes reduce to point-segment projections.
 DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
                               const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2)
@@ -234,7 +235,11 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
     else
     {
       const double b = d1.dot(d2);
-      const double denom = d1.cross(d2).squaredNorm();
+      // |d1 x d2|^2 = a e - b^2; near parallel the difference cancels, so it is then recomputed
+      // from the cross product (relative error of a e - b^2 ~ 1e-16 / 1e-3 otherwise).
+      double denom = a * e - b * b;
+      if (denom < 1e-3 * a * e)
+        denom = d1.cross(d2).squaredNorm();
       if (denom > kParallelSin2 * a * e)
       {
         s = clamp01((b * f - c * e) / denom);
@@ -326,7 +331,7 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
       return out;
     }
   }
-  const Eigen::Vector3d d = p1 == p2 ? Eigen::Vector3d::Zero().eval() : (R.transpose() * (p2 - p1)).eval();
+  const Eigen::Vector3d d = R.transpose() * (p2 - p1);  // exactly zero for a sphere
 
   auto slope = [&](double t) {
     double g = 0.0;

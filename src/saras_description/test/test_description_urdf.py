@@ -126,3 +126,27 @@ def test_make_urdf_bad_arguments_exit_2_with_message(tmp_path):
     # roslaunch's private arguments are ignored
     out = _make_urdf(['touch', '--prefix', 'touch_left/', '__name:=x', '__log:=/tmp/x.log'])
     assert out.returncode == 0 and '<robot name="touch_left">' in out.stdout
+
+
+def test_rviz_config_matches_the_descriptions():
+    """platform.rviz: a RobotModel per robot_description, the contract topics, every URDF link
+    listed in the TF display (unlisted frames would be shown with names), fixed frame world."""
+    import yaml  # pylint: disable=import-outside-toplevel
+    with open(os.path.join(PKG, 'rviz', 'platform.rviz')) as f:
+        rviz = yaml.safe_load(f)
+    manager = rviz['Visualization Manager']
+    assert manager['Global Options']['Fixed Frame'] == 'world'
+    displays = manager['Displays']
+    models = {d['Robot Description'] for d in displays if d['Class'] == 'rviz/RobotModel'}
+    assert models == {r + '/robot_description' for r in
+                      ('mesa_left', 'mesa_right', 'PSM1', 'PSM2', 'ECM', 'touch_left', 'touch_right')}
+    by_class = {d['Class']: d for d in displays}
+    assert by_class['rviz/MarkerArray']['Marker Topic'] == '/collision/markers'
+    assert by_class['rviz/Image']['Image Topic'] == '/visual_feedback/left/image'
+    frames = by_class['rviz/TF']['Frames']
+    assert by_class['rviz/TF']['Show Names'] is True
+    links = set(UrdfTree(urdf.platform_urdf().to_string()).links)
+    assert links - set(frames) == set()
+    shown = {name for name, v in frames.items() if isinstance(v, dict) and v['Value']}
+    assert {'world', 'mesa_left/rcm', 'mesa_right/tool_tip', 'PSM1/tool_tip', 'ECM/tool_tip',
+            'touch_left/stylus'} <= shown

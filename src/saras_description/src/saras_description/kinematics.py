@@ -23,7 +23,7 @@ from collections import OrderedDict
 import numpy as np
 
 from saras_description.geometry import EcmGeometry, PsmGeometry, SarasArmGeometry, TouchGeometry
-from saras_description.transforms import (axis_angle, matrix_to_quat, quat_to_matrix, rot_x,
+from saras_description.transforms import (matrix_to_quat, quat_to_matrix, rot_x,
                                           rot_y, rot_z, trans, wrap_angle, xyz_rpy)
 
 SARAS_ARM_PREFIXES = ('mesa_left/', 'mesa_right/')
@@ -145,13 +145,16 @@ def saras_arm_flange_in_base(pa_joints):
 
 
 def saras_arm_flange_to_rcm():
-    """Fixed transform flange -> ``<p>rcm``."""
-    return xyz_rpy(SarasArmGeometry.FLANGE_TO_RCM_XYZ, SarasArmGeometry.FLANGE_TO_RCM_RPY)
+    """Fixed transform flange -> ``<p>rcm`` (a copy)."""
+    return _FLANGE_TO_RCM.copy()
+
+
+_FLANGE_TO_RCM = xyz_rpy(SarasArmGeometry.FLANGE_TO_RCM_XYZ, SarasArmGeometry.FLANGE_TO_RCM_RPY)
 
 
 def saras_arm_rcm_in_base(pa_joints):
     """``<p>rcm`` (remote centre of motion, the trocar) in ``<p>sbs_world`` (4x4)."""
-    return saras_arm_flange_in_base(pa_joints) @ saras_arm_flange_to_rcm()
+    return saras_arm_flange_in_base(pa_joints) @ _FLANGE_TO_RCM
 
 
 def saras_arm_tip_in_rcm(er_adapter_joints):

@@ -3,7 +3,8 @@
 tool poses and collision distances (see scene.py).
 
 Private parameters: ~rate [Hz] (image rate, default 30), ~bad_input (bool, default false: when
-true also publishes malformed images, NaN poses and short distance arrays between good ones),
+true also publishes truncated images, uncalibrated camera_info, NaN poses and short distance
+arrays between good ones),
 ~images (bool, default true: false publishes only TF, poses and distances, for use with the real
 saras_drivers/endoscope_sim).
 """
@@ -83,6 +84,8 @@ class FakeEndoscope:
             img.data = self.data[e]
             if self.bad_input and self.count % 5 == 2:
                 img.data = self.data[e][:100]  # truncated buffer: must be rejected, not crash
+            if self.bad_input and self.count % 7 == 3:
+                info.K = [0.0] * 9  # uncalibrated: published without overlay, not a crash
             self.info_pubs[e].publish(info)
             self.image_pubs[e].publish(img)
 
