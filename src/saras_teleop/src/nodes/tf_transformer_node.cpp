@@ -37,7 +37,7 @@ public:
   TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : buffer_(ros::Duration(5.0))
     , est_(paramPositive(pnh, "low_pass_cutoff", 50.0), paramPositive(pnh, "max_gap", 0.1))
-    , status_(nh, "teleop/tf_transformer" + ros::this_node::getNamespace())
+    , status_(nh, ros::this_node::getName().substr(1))
   {
     reference_ = paramString(pnh, "reference_frame", "mesa_left/sbs_world");
     tracked_ = paramString(pnh, "tracked_frame", "touch_left/stylus");

@@ -46,7 +46,7 @@ class VelocityIntegratorNode
 {
 public:
   VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-    : vi_(readParams(pnh)), status_(nh, "teleop/velocity_integrator" + ros::this_node::getNamespace())
+    : vi_(readParams(pnh)), status_(nh, ros::this_node::getName().substr(1))
   {
     const double rate = paramPositive(pnh, "rate", 1000.0);
     period_ = 1.0 / rate;
