@@ -42,33 +42,31 @@ launch_pid=$!
 pids=("$launch_pid" "${pids[@]}")
 
 capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
+vf_start=$(( DURATION > 12 ? 6 : 1 ))
 for ((t = 0; t < capture_at; t++)); do
   sleep 1
   if ! kill -0 "$launch_pid" 2>/dev/null; then
     echo "demo: the platform stopped early; last lines of $OUT/launch.log:"; tail -n 30 "$OUT/launch.log"
     exit 2
   fi
+  if [ $t -eq $vf_start ]; then
+    # augmented stereo stream for the report: last pair + which warning colours occurred
+    rosrun saras_visual_feedback visual_feedback_snapshot _output:="$REPORT/augmented_stereo" \
+      _duration:=$(( capture_at - vf_start - 1 )) >"$OUT/snapshot.log" 2>&1 &
+    snap_pid=$!
+  fi
 done
 
-echo "demo: capturing the augmented stereo frame and the rviz window"
-snapshot_ok=0
-rosrun saras_bringup snapshot_image --timeout 8 \
-  /visual_feedback/left/image:"$REPORT/augmented_left.png" \
-  /visual_feedback/right/image:"$REPORT/augmented_right.png" && snapshot_ok=1
-if [ $snapshot_ok -eq 1 ]; then
-  python3 - "$REPORT" <<'PY'
-import sys, cv2
-d = sys.argv[1]
-l, r = cv2.imread(d + '/augmented_left.png'), cv2.imread(d + '/augmented_right.png')
-cv2.imwrite(d + '/augmented_stereo.png', cv2.hconcat([l, r]))
-PY
-fi
+echo "demo: capturing the rviz window and the node graph"
 python3 -c "from PIL import ImageGrab; ImageGrab.grab(xdisplay='$DISPLAY').save('$REPORT/rviz.png')" \
   || echo "demo: rviz screenshot failed"
 rosparam dump "$OUT/params.yaml" 2>/dev/null || true
 python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
 sleep $(( DURATION - capture_at ))
 
+[ -n "${snap_pid:-}" ] && wait "$snap_pid"
+colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
+echo "demo: visual feedback: $colours"
 echo "demo: stopping the platform"
 kill -INT "$launch_pid" 2>/dev/null
 for ((t = 0; t < 40; t++)); do kill -0 "$launch_pid" 2>/dev/null || break; sleep 0.5; done
@@ -86,7 +84,7 @@ rosrun saras_bringup bag_check "$OUT/platform.bag" --json "$REPORT/topics.json" 
 check_rc=${PIPESTATUS[0]}
 rosrun saras_bringup make_report "$OUT/platform.bag" "$REPORT" --check "$REPORT/topics.json" \
   --params "$OUT/params.yaml" \
-  --extra "Augmented stereo endoscope frame|augmented_stereo.png|/visual_feedback/left/image and /visual_feedback/right/image (HMD images) near the end of the run" \
+  --extra "Augmented stereo endoscope frame|augmented_stereo.png|/visual_feedback/{left,right}/image (HMD images), last pair of the run; over the run: $colours" \
   --extra "rviz (headless, Xvfb)|rviz.png|launch/platform.launch rviz:=true, Figure 4 scene" \
   --summary "make demo DURATION=$DURATION: simulated platform, $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "demo: report at $REPORT/index.html"
