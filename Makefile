@@ -6,6 +6,7 @@ SHELL := /bin/bash
 DURATION ?= 30
 OUT ?= $(CURDIR)/out/demo
 ARGS ?=
+CONTROL_RATE ?=
 
 .PHONY: all setup build test demo bench lint run clean
 
@@ -21,7 +22,7 @@ test: build
 	@bash scripts/run_tests.sh
 
 demo: build
-	@bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
+	@CONTROL_RATE="$(CONTROL_RATE)" bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
 
 run: build
 	@bash -c 'source scripts/env.sh && roslaunch launch/platform.launch $(ARGS)'

@@ -24,7 +24,7 @@ def test_readme_starts_with_the_two_commands_and_ci_runs_the_test_one():
     with open(os.path.join(WS, 'README.md')) as f:
         readme = f.read()
     first_block = re.search(r'```(?:bash|sh)?\n(.*?)```', readme, re.S).group(1)
-    commands = [l.strip() for l in first_block.splitlines() if l.strip() and not l.strip().startswith('#')]
+    commands = [l.split('#')[0].strip() for l in first_block.splitlines() if l.split('#')[0].strip()]
     assert commands[:2] == ['make demo', 'make test']
     with open(os.path.join(WS, '.ci', 'run')) as f:
         ci = [l.strip() for l in f if l.strip() and not l.startswith('#')]

@@ -45,7 +45,8 @@ def _number(data, key, default, low, high):
     return value
 
 
-def parse_recording_config(data):
+def parse_recording_config(data, control_rate=1000.0):
+    """Validate a loaded recording.yaml; ``rate: control`` streams get ``control_rate`` [Hz]."""
     if not isinstance(data, dict) or not isinstance(data.get('streams'), list) or not data['streams']:
         raise RecordingConfigError('expected a mapping with a non-empty "streams" list')
     streams, seen = [], set()
@@ -59,6 +60,8 @@ def parse_recording_config(data):
             raise RecordingConfigError('streams[%d]: topic %s listed twice' % (i, topic))
         seen.add(topic)
         rate = entry.get('rate')
+        if rate == 'control':
+            rate = control_rate
         if isinstance(rate, bool) or not isinstance(rate, (int, float)) or rate < 0 or rate > 1e5:
             raise RecordingConfigError('streams[%d] (%s): "rate" must be a number in [0, 1e5] Hz, got %r'
                                        % (i, topic, rate))
@@ -71,14 +74,14 @@ def parse_recording_config(data):
                            int(_number(data, 'chunk_kb', 4096, 64, 1048576)))
 
 
-def load_recording_config(path):
+def load_recording_config(path, control_rate=1000.0):
     try:
         with open(path) as stream:
             data = yaml.safe_load(stream)
     except (OSError, yaml.YAMLError) as exc:
         raise RecordingConfigError('cannot read %s: %s' % (path, exc))
     try:
-        return parse_recording_config(data)
+        return parse_recording_config(data, control_rate)
     except RecordingConfigError as exc:
         raise RecordingConfigError('%s: %s' % (path, exc))
 
