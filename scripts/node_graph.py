@@ -10,8 +10,8 @@ import sys
 
 import rosgraph.masterapi
 
-IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock')
-IGNORED_NODES = ('/rosout', '/snapshot_image', '/rostopic', '/rosnode')
+IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock', '/tf', '/tf_static', '/saras/status')
+IGNORED_NODES = ('/rosout', '/rostopic', '/rosnode', '/wait_ready', '/recorder', '/visual_feedback_snapshot', '/node_graph')
 
 
 def ident(name):
@@ -25,6 +25,7 @@ def main(out_path):
     sub_map = {t: [n for n in ns if not n.startswith(IGNORED_NODES)] for t, ns in subs}
     nodes = set()
     for topic, publishers in pubs:
+        nodes.update(p for p in publishers if not p.startswith(IGNORED_NODES))
         if topic in IGNORED_TOPICS:
             continue
         for p in publishers:
@@ -37,9 +38,11 @@ def main(out_path):
                     edges.setdefault((p, s), []).append(topic)
     for topic, ns in sub_map.items():
         nodes.update(ns)
+    nodes.discard('/rosout')
     lines = ['# Platform node graph', '',
              'Captured from the running simulated platform (`make demo`, scripts/node_graph.py).',
-             'Edges are topics (`/tf`, `/tf_static` included); /rosout omitted.', '',
+             'Edges are topics; `/tf`, `/tf_static`, the `/saras/status` heartbeats and /rosout are omitted',
+             '(every node uses TF; see docs/interfaces.md for frames).', '',
              '```mermaid', 'flowchart LR']
     for n in sorted(nodes):
         lines.append('  %s["%s"]' % (ident(n), n))

@@ -91,3 +91,16 @@ def test_sim_false_starts_no_simulator_and_switches_are_honoured():
     # both SARAS channels come from the same include (one node per side, same executable)
     sides = [n for n in sim if n.namespace.startswith('/mesa_')]
     assert {n.namespace.rstrip('/') for n in sides} >= {'/mesa_left', '/mesa_right'}
+
+
+def test_node_graph_lists_every_node_of_platform_launch():
+    """docs/node_graph.md (captured from the running platform) and the README diagram are in sync
+    with the launch files: every node started in simulation (no rviz, no recorder) appears."""
+    with open(os.path.join(WS, 'docs', 'node_graph.md')) as f:
+        graph = f.read()
+    with open(os.path.join(WS, 'README.md')) as f:
+        readme = f.read()
+    for n in _launch_nodes(['rviz:=false', 'record:=false']):
+        name = (n.namespace.rstrip('/') + '/' + n.name)
+        assert '"%s"' % name in graph, '%s missing from docs/node_graph.md' % name
+        assert '"%s"' % name in readme, '%s missing from the README node graph' % name
