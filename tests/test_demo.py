@@ -42,3 +42,5 @@ def test_demo_records_every_required_stream_and_writes_the_report(tmp_path):
         assert (report / png).exists() and (report / png).stat().st_size > 10000, png
         assert png in html
     assert 'not recorded:' not in html and 'not captured:' not in html
+    # the calibration accuracy table (robust hand-eye vs OpenCV's methods) is part of the report
+    assert '| robust |' in html and '| tsai |' in html

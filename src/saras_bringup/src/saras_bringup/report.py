@@ -181,7 +181,8 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     """Write the plots and index.html into ``out_dir``; returns the index path.
 
     check: dict with 'results' and 'problems' (from bag_check --json); params: rosparam dump (dict);
-    extras: list of (title, png path relative to out_dir, caption) for live captures.
+    extras: list of (title, path relative to out_dir, caption): PNG captures are shown as images,
+    .txt files (e.g. a benchmark table) as preformatted text.
     """
     import rosbag
     os.makedirs(out_dir, exist_ok=True)
@@ -214,7 +215,11 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
                '/mesa_left/contact_force, /mesa_right/contact_force')
     for title, rel, caption in (extras or []):
-        if rel and os.path.exists(os.path.join(out_dir, rel)):
+        if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
+            with open(os.path.join(out_dir, rel)) as stream:
+                text = stream.read()
+            rep.sections.append((title, '<pre>%s</pre><p>%s</p>' % (html.escape(text), html.escape(caption))))
+        elif rel and os.path.exists(os.path.join(out_dir, rel)):
             rep.sections.append((title, '<img src="%s" alt="%s"/><p>%s</p>' % (
                 rel, html.escape(title), html.escape(caption))))
         else:
