@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import yaml
+from saras_description import transforms  # the platform's one implementation of rotations
 
 
 class FramesError(ValueError):
@@ -43,23 +44,13 @@ class StaticFrame(object):
 
 
 def rpy_to_quaternion(roll, pitch, yaw):
-    """Fixed-axis roll/pitch/yaw [rad] to a unit quaternion (x, y, z, w)."""
-    cr, sr = math.cos(roll / 2.0), math.sin(roll / 2.0)
-    cp, sp = math.cos(pitch / 2.0), math.sin(pitch / 2.0)
-    cy, sy = math.cos(yaw / 2.0), math.sin(yaw / 2.0)
-    return (sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-            cr * cp * cy + sr * sp * sy)
+    """Fixed-axis roll/pitch/yaw [rad] to a unit quaternion (x, y, z, w), w >= 0."""
+    return tuple(float(v) for v in transforms.matrix_to_quat(transforms.rpy_to_matrix([roll, pitch, yaw])))
 
 
 def quaternion_to_matrix(q):
     """Unit quaternion (x, y, z, w) to a 3x3 rotation matrix."""
-    x, y, z, w = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return transforms.quat_to_matrix(q)
 
 
 def _vector(entry, index, key, length):
