@@ -12,7 +12,7 @@ import datetime
 import os
 
 import numpy as np
-import yaml
+from saras_description.frames import FramesError, load_frames, parse_frames
 
 from .transforms import inverse, rpy_from_transform, transform_from_rpy, validate_transform
 
@@ -37,30 +37,25 @@ def entry_transform(entry):
     return transform_from_rpy(entry['xyz'], entry['rpy'])
 
 
-def _check_entry(e, i, path):
-    if not isinstance(e, dict) or not {'parent', 'child', 'xyz', 'rpy'} <= set(e):
-        raise WorldFramesError('%s: frames[%d] must have parent, child, xyz, rpy' % (path, i))
-    for k in ('xyz', 'rpy'):
-        v = e[k]
-        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(isinstance(x, (int, float)) for x in v)
-                and np.all(np.isfinite(v))):
-            raise WorldFramesError('%s: frames[%d].%s must be 3 finite numbers, got %r' % (path, i, k, v))
-    if not e['parent'] or not e['child'] or e['parent'] == e['child']:
-        raise WorldFramesError('%s: frames[%d] has invalid parent/child %r/%r' % (path, i, e['parent'], e['child']))
+def _entry(frame):
+    return {'parent': frame.parent, 'child': frame.child, 'xyz': list(frame.xyz), 'rpy': list(frame.rpy)}
+
+
+def _validated(entries, where):
+    """Entries checked by the platform's one parser of the format (saras_description.frames)."""
+    try:
+        return [_entry(f) for f in parse_frames({'frames': list(entries)}, root=None)]
+    except FramesError as exc:
+        raise WorldFramesError('%s: %s' % (where, exc))
 
 
 def load_world_frames(path):
-    """List of entries from a world-frame YAML file. Raises :class:`WorldFramesError`."""
+    """List of entries ``{parent, child, xyz, rpy}`` of a world-frame YAML file (quaternion entries
+    are converted to rpy). Raises :class:`WorldFramesError`."""
     try:
-        with open(path) as f:
-            data = yaml.safe_load(f)
-    except (OSError, yaml.YAMLError) as exc:
-        raise WorldFramesError('cannot read world frames %s: %s' % (path, exc))
-    if not isinstance(data, dict) or not isinstance(data.get('frames'), list):
-        raise WorldFramesError('%s: expected a mapping with a "frames" list' % path)
-    for i, e in enumerate(data['frames']):
-        _check_entry(e, i, path)
-    return data['frames']
+        return [_entry(f) for f in load_frames(path, root=None)]
+    except FramesError as exc:
+        raise WorldFramesError(str(exc))
 
 
 def save_world_frames(path, entries, comment=None):
@@ -71,8 +66,7 @@ def save_world_frames(path, entries, comment=None):
     if comment:
         lines += ['# ' + c for c in comment.splitlines()]
     lines.append('frames:')
-    for i, e in enumerate(entries):
-        _check_entry(e, i, path)
+    for e in _validated(entries, path):
         lines.append('  - {parent: %s, child: %s, xyz: [%s], rpy: [%s]}' % (
             e['parent'], e['child'], ', '.join(repr(float(v)) for v in e['xyz']),
             ', '.join(repr(float(v)) for v in e['rpy'])))

@@ -10,10 +10,9 @@ from collections import namedtuple
 import numpy as np
 import yaml
 
+from saras_description import frames as frames_mod
 from saras_description.transforms import xyz_rpy
 
-#: Static transform entry of the frames-YAML format shared with saras_bringup/world_frames.yaml.
-Frame = namedtuple('Frame', 'parent child xyz rpy')
 #: ECM camera extrinsics: ``tip_to_left`` (ECM/tool_tip -> endoscope/left_optical_frame) and
 #: ``left_to_right`` (left -> right optical frame), 4x4 each; the source frames too.
 HandEye = namedtuple('HandEye', 'tip_to_left left_to_right frames')
@@ -84,23 +83,16 @@ def _numbers(value, n, where):
 
 
 def load_frames(path):
-    """Frames list of a world_frames-format YAML: ``frames: [{parent, child, xyz, rpy}, ...]``."""
-    data = _load(path)
-    items = data.get('frames')
-    if not isinstance(items, list) or not items:
-        raise ConfigError('%s: "frames" must be a non-empty list' % path)
-    frames = []
-    for i, item in enumerate(items):
-        where = '%s: frames[%d]' % (path, i)
-        if not isinstance(item, dict):
-            raise ConfigError('%s: expected a mapping' % where)
-        for key in ('parent', 'child'):
-            if not isinstance(item.get(key), str) or not item[key]:
-                raise ConfigError('%s.%s: expected a frame name' % (where, key))
-        frames.append(Frame(item['parent'], item['child'],
-                            _numbers(item.get('xyz'), 3, where + '.xyz'),
-                            _numbers(item.get('rpy'), 3, where + '.rpy')))
-    return frames
+    """Frames of a frames-format YAML (``frames: [{parent, child, xyz, rpy|quaternion}, ...]``).
+
+    Parsed by :mod:`saras_description.frames` (the platform's one parser of the format) without
+    requiring a ``world`` root (the hand-eye file is a stand-alone chain). Entries carry
+    ``parent``, ``child``, ``xyz`` [m] and ``rpy`` [rad].
+    """
+    try:
+        return frames_mod.load_frames(path, root=None)
+    except frames_mod.FramesError as exc:
+        raise ConfigError(str(exc))
 
 
 def load_hand_eye(path=None):

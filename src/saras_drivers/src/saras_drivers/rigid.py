@@ -1,35 +1,33 @@
-"""Small rigid-body helpers shared by the main-surgeon simulators (no ROS imports).
+"""Rigid-body helpers of the main-surgeon simulators (no ROS imports).
 
-Conventions: homogeneous transforms are 4x4 numpy arrays ``T_a_b`` mapping coordinates in
-frame ``b`` to frame ``a`` (``p_a = T_a_b @ p_b``); quaternions are ``(x, y, z, w)`` as in
-geometry_msgs; lengths in metres, angles in radians.
+Thin 3x3 / 4x4 adapters over :mod:`saras_description.transforms` (the platform's one
+implementation of rotations and quaternions) and :mod:`saras_description.frames` (the one parser of
+the frames-YAML format). Conventions: ``T_a_b`` maps coordinates in frame ``b`` to frame ``a``
+(``p_a = T_a_b @ p_b``); quaternions are ``(x, y, z, w)`` as in geometry_msgs; metres, radians.
 """
-import math
-
 import numpy as np
+from saras_description import frames as _frames
+from saras_description import transforms as _tf
 
 
 def rot_x(a):
-    """Rotation matrix about x by ``a`` [rad]."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    """3x3 rotation about x by ``a`` [rad]."""
+    return _tf.rot_x(a)[:3, :3]
 
 
 def rot_y(a):
-    """Rotation matrix about y by ``a`` [rad]."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    """3x3 rotation about y by ``a`` [rad]."""
+    return _tf.rot_y(a)[:3, :3]
 
 
 def rot_z(a):
-    """Rotation matrix about z by ``a`` [rad]."""
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    """3x3 rotation about z by ``a`` [rad]."""
+    return _tf.rot_z(a)[:3, :3]
 
 
 def rpy_to_matrix(roll, pitch, yaw):
     """Fixed-axis roll (x), then pitch (y), then yaw (z): ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
-    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
+    return _tf.rpy_to_matrix((roll, pitch, yaw))
 
 
 def make_transform(R=None, t=None):
@@ -42,42 +40,12 @@ def make_transform(R=None, t=None):
     return T
 
 
-def invert(T):
-    """Inverse of a rigid 4x4 transform."""
-    Ti = np.eye(4)
-    Ti[:3, :3] = T[:3, :3].T
-    Ti[:3, 3] = -T[:3, :3].T @ T[:3, 3]
-    return Ti
-
-
-def quaternion_from_matrix(R):
-    """Unit quaternion ``(x, y, z, w)`` (w >= 0) of a 3x3 rotation matrix."""
-    R = np.asarray(R, dtype=float)[:3, :3]
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
-    if tr > 0.0:
-        s = math.sqrt(tr + 1.0) * 2.0
-        w, x, y, z = 0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s
-    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
-        s = math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2]) * 2.0
-        w, x, y, z = (R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s
-    elif R[1, 1] > R[2, 2]:
-        s = math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2]) * 2.0
-        w, x, y, z = (R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s
-    else:
-        s = math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1]) * 2.0
-        w, x, y, z = (R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s
-    q = np.array([x, y, z, w])
-    q /= np.linalg.norm(q)
-    return q if q[3] >= 0.0 else -q
-
-
-def matrix_from_quaternion(q):
-    """3x3 rotation matrix of a quaternion ``(x, y, z, w)`` (normalised here)."""
-    x, y, z, w = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+#: Inverse of a rigid 4x4 transform.
+invert = _tf.inverse
+#: Unit quaternion ``(x, y, z, w)`` (w >= 0) of a 3x3 rotation matrix.
+quaternion_from_matrix = _tf.matrix_to_quat
+#: 3x3 rotation matrix of a quaternion ``(x, y, z, w)`` (normalised).
+matrix_from_quaternion = _tf.quat_to_matrix
 
 
 def transform_from_pose(xyz, quat):
@@ -88,19 +56,6 @@ def transform_from_pose(xyz, quat):
 def load_frames_file(path):
     """Read a world_frames YAML (saras_bringup format) into ``{child: (parent, T_parent_child)}``.
 
-    Raises ``ValueError`` naming the offending entry on malformed content.
+    Raises ``ValueError`` (:class:`saras_description.frames.FramesError`) naming the offending entry.
     """
-    import yaml
-    with open(path) as f:
-        data = yaml.safe_load(f) or {}
-    out = {}
-    for i, e in enumerate(data.get('frames', [])):
-        try:
-            xyz = [float(v) for v in e['xyz']]
-            rpy = [float(v) for v in e['rpy']]
-            if len(xyz) != 3 or len(rpy) != 3 or not all(map(math.isfinite, xyz + rpy)):
-                raise ValueError('xyz/rpy must be 3 finite numbers')
-            out[str(e['child'])] = (str(e['parent']), make_transform(rpy_to_matrix(*rpy), xyz))
-        except (KeyError, TypeError, ValueError) as ex:
-            raise ValueError('%s: frames[%d] invalid: %s' % (path, i, ex))
-    return out
+    return _frames.frames_by_child(_frames.load_frames(path, root=None))

@@ -1,13 +1,18 @@
-"""Static world frames of the platform: parsing and validation of world_frames.yaml.
+"""Static frames files of the platform: THE parser and validator of the frames-YAML format.
 
-The file format (shared with saras_calibration, which writes it)::
+Used by every package that reads the format (saras_bringup's world_frames node, the URDF generator
+and hand-eye loader of this package, the calibration suite, the dVRK simulator), so the format has
+one definition. The file format (saras_calibration writes it)::
 
     frames:
       - {parent: world, child: PSM1, xyz: [0.10, -0.08, 0.22], rpy: [0.0, 0.0, 0.0]}
 
 ``xyz`` in metres, ``rpy`` in radians (fixed axes: roll about x, pitch about y, yaw about z,
 i.e. R = Rz(yaw) Ry(pitch) Rx(roll), the URDF / tf convention). A ``quaternion: [x, y, z, w]``
-may be given instead of ``rpy``. No ROS import here: the node ``scripts/world_frames`` adapts it.
+may be given instead of ``rpy``. No ROS import here.
+
+:func:`parse_frames` checks the tree against a ``root`` frame (``world`` for world_frames.yaml);
+``root=None`` accepts any forest (e.g. the hand-eye file ``ECM/tool_tip -> endoscope/...``).
 """
 import math
 
@@ -15,21 +20,36 @@ import numpy as np
 import yaml
 from saras_description import transforms  # the platform's one implementation of rotations
 
+__all__ = ['FramesError', 'StaticFrame', 'rpy_to_quaternion', 'quaternion_to_matrix', 'parse_frames',
+           'load_frames', 'world_transform', 'frames_by_child']
+
 
 class FramesError(ValueError):
     """A world-frames file that cannot be used; the message names the entry and the field."""
 
 
 class StaticFrame(object):
-    """One static transform parent -> child (translation [m], unit quaternion x, y, z, w)."""
+    """One static transform parent -> child.
 
-    __slots__ = ('parent', 'child', 'translation', 'quaternion')
+    ``translation`` (alias ``xyz``) [m], unit ``quaternion`` (x, y, z, w) and ``rpy`` [rad] (as
+    written in the file, or derived from the quaternion).
+    """
 
-    def __init__(self, parent, child, translation, quaternion):
+    __slots__ = ('parent', 'child', 'translation', 'quaternion', 'rpy')
+
+    def __init__(self, parent, child, translation, quaternion, rpy=None):
         self.parent = parent
         self.child = child
         self.translation = tuple(float(v) for v in translation)
         self.quaternion = tuple(float(v) for v in quaternion)
+        if rpy is None:
+            rpy = transforms.matrix_to_rpy(quaternion_to_matrix(self.quaternion))
+        self.rpy = tuple(float(v) for v in rpy)
+
+    @property
+    def xyz(self):
+        """Translation [m] (the file's key)."""
+        return self.translation
 
     def matrix(self):
         """4x4 homogeneous transform T_parent_child."""
@@ -73,8 +93,8 @@ def parse_frames(data, root='world'):
     """Validate a loaded YAML document and return a list of StaticFrame.
 
     Checks: every entry has parent/child names and a finite pose; quaternions are unit length
-    (within 1e-6, then renormalised); no child has two parents; every frame is connected to
-    ``root`` (a tree, no cycles).
+    (within 1e-6, then renormalised); no child has two parents; no cycles; with a ``root``, every
+    frame is connected to it.
     """
     if not isinstance(data, dict) or not isinstance(data.get('frames'), list):
         raise FramesError('expected a mapping with a "frames" list')
@@ -93,6 +113,7 @@ def parse_frames(data, root='world'):
         if child in parents:
             raise FramesError('frames[%d]: "%s" already has parent "%s"' % (i, child, parents[child]))
         xyz = _vector(entry, i, 'xyz', 3)
+        rpy = None
         if 'quaternion' in entry:
             q = _vector(entry, i, 'quaternion', 4)
             n = math.sqrt(sum(v * v for v in q))
@@ -101,14 +122,17 @@ def parse_frames(data, root='world'):
                                   % (i, child, n))
             q = [v / n for v in q]
         else:
-            q = rpy_to_quaternion(*_vector(entry, i, 'rpy', 3))
+            rpy = _vector(entry, i, 'rpy', 3)
+            q = rpy_to_quaternion(*rpy)
         parents[child] = parent
-        frames.append(StaticFrame(parent, child, xyz, q))
+        frames.append(StaticFrame(parent, child, xyz, q, rpy))
     for f in frames:
         seen = {f.child}
         node = f.parent
         while node != root:
             if node not in parents:
+                if root is None:
+                    break
                 raise FramesError('frame "%s" is not connected to "%s" (chain stops at "%s")'
                                   % (f.child, root, node))
             if node in seen:
@@ -129,6 +153,11 @@ def load_frames(path, root='world'):
         return parse_frames(data, root)
     except FramesError as exc:
         raise FramesError('%s: %s' % (path, exc))
+
+
+def frames_by_child(frames):
+    """``{child: (parent, T_parent_child)}`` of a frame list (4x4 numpy transforms)."""
+    return {f.child: (f.parent, f.matrix()) for f in frames}
 
 
 def world_transform(frames, child, root='world'):

@@ -1,4 +1,4 @@
-"""saras_bringup.frames: parsing, validation and composition of the static world frames."""
+"""saras_description.frames: THE parser of the frames-YAML format (validation, composition)."""
 import math
 import os
 
@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from saras_bringup.frames import FramesError, load_frames, parse_frames, rpy_to_quaternion, world_transform
+from saras_description.frames import FramesError, load_frames, parse_frames, rpy_to_quaternion, world_transform
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SHIPPED = os.path.join(HERE, '..', 'config', 'world_frames.yaml')
+SHIPPED = os.path.join(HERE, "..", "..", "saras_bringup", "config", "world_frames.yaml")
 
 
 def test_rpy_matches_scipy_fixed_axes():
@@ -70,3 +70,23 @@ def test_unreadable_file(tmp_path):
     p.write_text('frames: [ {parent: world')
     with pytest.raises(FramesError, match='cannot read'):
         load_frames(str(p))
+
+
+def test_rpy_kept_as_written_and_derived_from_quaternions():
+    frames = parse_frames({'frames': [
+        entry(child='a', rpy=[0.1, -0.2, 0.3]),
+        {'parent': 'a', 'child': 'b', 'xyz': [1, 2, 3], 'quaternion': list(Rotation.from_euler('xyz', [0.3, 0.2, -0.1]).as_quat())}]})
+    assert frames[0].rpy == (0.1, -0.2, 0.3)
+    assert np.allclose(frames[1].rpy, [0.3, 0.2, -0.1], atol=1e-12)
+    assert frames[1].xyz == (1.0, 2.0, 3.0)
+
+
+def test_forest_without_root():
+    data = {'frames': [entry(parent='ECM/tool_tip', child='cam'), entry(parent='cam', child='right')]}
+    with pytest.raises(FramesError, match='not connected'):
+        parse_frames(data)
+    frames = parse_frames(data, root=None)
+    assert [f.child for f in frames] == ['cam', 'right']
+    cyc = {'frames': [entry(parent='b', child='a'), entry(parent='a', child='b')]}
+    with pytest.raises(FramesError, match='cycle'):
+        parse_frames(cyc, root=None)
