@@ -106,6 +106,38 @@ def plot_distances(data, thresholds, t0):
     return fig
 
 
+def colour_occupancy(series, thresholds):
+    """Per tool, how many /collision/distances samples fall in each colour of the visual feedback.
+
+    The VisualFeedback nodelet draws a tool red at distance <= collision threshold, yellow at
+    <= warning threshold and green above (D7.2 Section 7). Returns ``{tool: {'red': n, 'yellow': n,
+    'green': n}}`` over the ``TOOLS`` entries present in the samples (NaN = unknown, not counted).
+    """
+    red, warn = thresholds['collision'], thresholds['warning']
+    out = {}
+    for i, name in enumerate(TOOLS):
+        _, v = _scalar(series, i)
+        v = v[np.isfinite(v)]
+        if not len(v):
+            continue
+        n_red = int(np.count_nonzero(v <= red))
+        n_yellow = int(np.count_nonzero((v > red) & (v <= warn)))
+        out[name] = {'red': n_red, 'yellow': n_yellow, 'green': int(len(v)) - n_red - n_yellow}
+    return out
+
+
+def occupancy_html(occ):
+    """HTML table of :func:`colour_occupancy` plus the colours that occurred over the run."""
+    rows = ''.join('<tr><td>%s</td><td>%d</td><td>%d</td><td>%d</td></tr>'
+                   % (html.escape(tool), c['red'], c['yellow'], c['green']) for tool, c in occ.items())
+    seen = [c for c in ('red', 'yellow', 'green') if any(o[c] for o in occ.values())]
+    missing = [c for c in ('red', 'yellow', 'green') if c not in seen]
+    verdict = ('all three colours occurred' if not missing else
+               '<span class="missing">never shown: %s</span>' % ', '.join(missing))
+    return ('<table><tr><th>tool</th><th>red samples</th><th>yellow samples</th><th>green samples</th></tr>'
+            '%s</table><p>Over the run: %s.</p>' % (rows, verdict))
+
+
 def plot_energies(data, t0, limits):
     names = ('/teleop/tank_master/energy', '/teleop/tank_slave/energy')
     if not any(data.get(n) for n in names):
@@ -210,6 +242,9 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
                    % (side, scale, side, side))
     rep.figure('distances.png', 'Tool distances', lambda: plot_distances(data, thresholds, t0),
                '/collision/distances with the collision (red) and warning (orange) thresholds')
+    occ = colour_occupancy(data.get('/collision/distances', []), thresholds)
+    if occ:
+        rep.sections.append(('Visual feedback colours over the run', occupancy_html(occ)))
     rep.figure('energies.png', 'Tank energies', lambda: plot_energies(data, t0, limits),
                '/teleop/tank_master/energy and /teleop/tank_slave/energy')
     rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
