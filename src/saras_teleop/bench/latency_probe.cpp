@@ -1,18 +1,36 @@
 // Benchmark probe for the running teleop nodes (see bench/run).
-// Publishes the master TF touch_left/stylus at 1 kHz (stamp = send time) plus the static frames and a
-// fake arm (/mesa_left/ee_pose = last target), and timestamps every hop of the forward path:
-//   TF -> master_pose (tf_transformer) -> des_twist (transparency) -> tank_twist (tank_slave)
-//      -> /mesa_left/target_pose (velocity_integrator)
-// Every node propagates the header stamp of the sample it processed, so latency = receive - stamp.
-// Also reports the achieved rate and period jitter of the 1 kHz outputs, and the core step costs.
-// Usage: teleop_latency_probe [duration_s]
+// Drives the master side at 1 kHz and timestamps every hop of the forward path
+//   [UDP packet -> touchball_receiver -> TF] -> master_pose (tf_transformer) -> des_twist (transparency)
+//      -> tank_twist (tank_slave) -> /mesa_left/target_pose (velocity_integrator)
+// Every teleop node propagates the header stamp of the TF sample it processed, so the latency of a hop
+// output = its receive time here - the TF sample's stamp (or - the UDP send time of the packet that
+// produced that TF sample, matched through /touchball/left/state: stamp -> packet_seq).
+// Modes:
+//   tf              the probe publishes the master TF touch_left/base -> touch_left/stylus itself
+//                   (stamp = send time): the teleop chain alone.
+//   udp:PORT:CPORT  the probe sends real Touchball state packets (protocol v1, saras_drivers
+//                   docs/touchball_protocol.md) to the touchball_receiver on 127.0.0.1:PORT and drains
+//                   its force commands on CPORT: the whole console-to-set-point path.
+// Also publishes the static frames and a fake arm (/mesa_left/ee_pose = last target at 250 Hz), reports
+// the achieved rate and period jitter of the 1 kHz outputs, and the core step costs.
+// Usage: teleop_latency_probe [duration_s] [tf|udp:PORT:CPORT] [label]   |   teleop_latency_probe --core-only
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <map>
-#include <thread>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <geometry_msgs/PoseStamped.h>
@@ -20,6 +38,7 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
+#include <saras_msgs/HapticDeviceState.h>
 #include <std_msgs/Float64.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -41,22 +60,80 @@ double pct(std::vector<double> v, double p)
 
 struct Arrivals
 {
-  std::map<uint64_t, double> by_stamp;  // stamp (ns) -> receive time
+  std::map<uint64_t, double> by_stamp;  // stamp (ns) -> first receive time
   std::vector<double> times;            // all receive times (for rate / jitter)
 };
 
-std::map<std::string, Arrivals> g_arr;
-std::map<uint64_t, double> g_sent;  // stamp ns -> send time
+/// Everything the subscriber callbacks record (AsyncSpinner thread) and the sender reads.
+struct Record
+{
+  std::mutex mutex;
+  std::map<std::string, Arrivals> arr;
+  std::map<uint64_t, double> sample;      // TF stamp (ns) -> TF sample time [s] (measured samples)
+  std::map<uint64_t, uint32_t> seq_of;    // TF stamp (ns) -> packet seq (udp mode, /touchball/left/state)
+  std::map<uint32_t, double> udp_sent;    // packet seq -> UDP send time [s] (measured packets)
+};
+Record g;
 
 template <class M>
 void record(const std::string& key, const M& m)
 {
   const double now = ros::Time::now().toSec();
-  Arrivals& a = g_arr[key];
+  std::lock_guard<std::mutex> lock(g.mutex);
+  Arrivals& a = g.arr[key];
   a.times.push_back(now);
-  const uint64_t s = m.header.stamp.toNSec();
-  if (g_sent.count(s) && !a.by_stamp.count(s))
-    a.by_stamp[s] = now;
+  a.by_stamp.emplace(m.header.stamp.toNSec(), now);
+}
+
+// ---- Touchball protocol v1 state packet (saras_drivers/touchball_protocol.py), little-endian
+uint32_t crc32(const uint8_t* d, std::size_t n)
+{
+  static std::array<uint32_t, 256> table = [] {
+    std::array<uint32_t, 256> t{};
+    for (uint32_t i = 0; i < 256; ++i)
+    {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k)
+        c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  uint32_t c = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < n; ++i)
+    c = table[(c ^ d[i]) & 0xFFu] ^ (c >> 8);
+  return c ^ 0xFFFFFFFFu;
+}
+
+template <class T>
+void put(std::vector<uint8_t>& b, T v)  // x86/ARM little-endian hosts
+{
+  const uint8_t* p = reinterpret_cast<const uint8_t*>(&v);
+  b.insert(b.end(), p, p + sizeof(T));
+}
+
+/// 160-byte STATE packet: header '<4sBBHId', two devices '<3d4ddI' (left, right), crc32 '<I'.
+std::vector<uint8_t> statePacket(uint32_t seq, double sender_time, const double left_xyz[3], const double right_xyz[3])
+{
+  std::vector<uint8_t> b;
+  b.reserve(160);
+  b.insert(b.end(), { 'T', 'B', 'A', 'L' });
+  put<uint8_t>(b, 1);   // version
+  put<uint8_t>(b, 1);   // type STATE
+  put<uint16_t>(b, 0);  // flags
+  put<uint32_t>(b, seq);
+  put<double>(b, sender_time);
+  for (const double* p : { left_xyz, right_xyz })
+  {
+    for (int i = 0; i < 3; ++i)
+      put<double>(b, p[i]);
+    for (double q : { 0.0, 0.0, 0.0, 1.0 })
+      put<double>(b, q);
+    put<double>(b, 0.0);    // clip angle
+    put<uint32_t>(b, 0u);   // buttons: no clutch
+  }
+  put<uint32_t>(b, crc32(b.data(), b.size()));
+  return b;
 }
 
 geometry_msgs::TransformStamped tf(const std::string& p, const std::string& c, double x, double y, double z,
@@ -123,13 +200,62 @@ void coreCosts()
   std::printf("| %-34s | %10.0f |\n", "TwistEstimator::addSample", t_est);
   std::printf("| %-34s | %10.0f |\n", "VelocityIntegrator::step", t_vi);
 }
+
+void printLatencyTable(const char* title, const std::vector<std::pair<std::string, std::string>>& hops,
+                       const std::map<uint64_t, double>& origin)
+{
+  std::printf("\n%s, %zu samples sent:\n", title, origin.size());
+  std::printf("| %-40s | %8s | %8s | %8s | %8s | %9s | %9s |\n", "hop (node -> topic)", "received", "p50 us", "p99 us",
+              "max us", "hop p50 us", "hop p99 us");
+  std::printf("|%s|%s|%s|%s|%s|%s|%s|\n", std::string(42, '-').c_str(), std::string(10, '-').c_str(),
+              std::string(10, '-').c_str(), std::string(10, '-').c_str(), std::string(10, '-').c_str(),
+              std::string(11, '-').c_str(), std::string(11, '-').c_str());
+  for (std::size_t h = 0; h < hops.size(); ++h)
+  {
+    std::vector<double> lat, hop;
+    for (const auto& kv : g.arr[hops[h].first].by_stamp)
+    {
+      auto o = origin.find(kv.first);
+      if (o == origin.end())
+        continue;  // warm-up sample or not matched to a measured packet
+      lat.push_back((kv.second - o->second) * 1e6);
+      if (h > 0)
+      {
+        const auto& prev = g.arr[hops[h - 1].first].by_stamp;
+        auto it = prev.find(kv.first);
+        if (it != prev.end())
+          hop.push_back((kv.second - it->second) * 1e6);
+      }
+      else
+      {
+        hop.push_back((kv.second - o->second) * 1e6);
+      }
+    }
+    std::printf("| %-40s | %8zu | %8.0f | %8.0f | %8.0f | %9.0f | %9.0f |\n", hops[h].second.c_str(), lat.size(),
+                pct(lat, 50), pct(lat, 99), pct(lat, 100), pct(hop, 50), pct(hop, 99));
+  }
+}
 }  // namespace
 
 int main(int argc, char** argv)
 {
+  if (argc > 1 && std::string(argv[1]) == "--core-only")
+  {
+    coreCosts();
+    return 0;
+  }
   ros::init(argc, argv, "teleop_latency_probe");
   ros::NodeHandle nh;
   const double duration = argc > 1 ? std::atof(argv[1]) : 10.0;
+  const std::string mode = argc > 2 ? argv[2] : "tf";
+  const std::string label = argc > 3 ? argv[3] : "";
+  int udp_port = 0, cmd_port = 0;
+  const bool udp = mode.compare(0, 4, "udp:") == 0;
+  if (udp && std::sscanf(mode.c_str(), "udp:%d:%d", &udp_port, &cmd_port) != 2)
+  {
+    std::fprintf(stderr, "mode must be tf or udp:PORT:CPORT\n");
+    return 2;
+  }
   const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
   ros::Publisher tf_pub = nh.advertise<tf2_msgs::TFMessage>("/tf", 100);
   ros::Publisher static_pub = nh.advertise<tf2_msgs::TFMessage>("/tf_static", 10, true);
@@ -138,6 +264,15 @@ int main(int argc, char** argv)
   ee.header.frame_id = "mesa_left/sbs_world";
   ee.pose.position.x = 0.3;
   ee.pose.orientation.w = 1.0;
+  std::mutex ee_mutex;
+  auto s0 = nh.subscribe<saras_msgs::HapticDeviceState>(
+      "/touchball/left/state", 1000,
+      [](const saras_msgs::HapticDeviceState::ConstPtr& m) {
+        record("0 touchball_state", *m);
+        std::lock_guard<std::mutex> lock(g.mutex);
+        g.seq_of[m->header.stamp.toNSec()] = m->packet_seq;
+      },
+      ros::VoidConstPtr(), fast);
   auto s1 = nh.subscribe<geometry_msgs::PoseStamped>(
       "/teleop/left/master_pose", 1000, [](const geometry_msgs::PoseStamped::ConstPtr& m) { record("1 master_pose", *m); },
       ros::VoidConstPtr(), fast);
@@ -149,18 +284,22 @@ int main(int argc, char** argv)
       ros::VoidConstPtr(), fast);
   auto s4 = nh.subscribe<geometry_msgs::PoseStamped>(
       "/mesa_left/target_pose", 1000,
-      [&ee](const geometry_msgs::PoseStamped::ConstPtr& m) {
+      [&ee, &ee_mutex](const geometry_msgs::PoseStamped::ConstPtr& m) {
         record("4 target_pose", *m);
+        std::lock_guard<std::mutex> lock(ee_mutex);
         ee.pose = m->pose;
       },
       ros::VoidConstPtr(), fast);
   auto s5 = nh.subscribe<geometry_msgs::WrenchStamped>(
       "/touchball/left/wrench_cmd", 1000,
-      [](const geometry_msgs::WrenchStamped::ConstPtr& m) { g_arr["wrench_cmd"].times.push_back(ros::Time::now().toSec()); (void)m; },
-      ros::VoidConstPtr(), fast);
+      [](const geometry_msgs::WrenchStamped::ConstPtr& m) { record("wrench_cmd", *m); }, ros::VoidConstPtr(), fast);
   auto s6 = nh.subscribe<std_msgs::Float64>(
       "/teleop/tank_master/energy", 1000,
-      [](const std_msgs::Float64::ConstPtr&) { g_arr["tank_master/energy"].times.push_back(ros::Time::now().toSec()); },
+      [](const std_msgs::Float64::ConstPtr&) {
+        const double now = ros::Time::now().toSec();
+        std::lock_guard<std::mutex> lock(g.mutex);
+        g.arr["tank_master/energy"].times.push_back(now);
+      },
       ros::VoidConstPtr(), fast);
 
   tf2_msgs::TFMessage st;
@@ -171,32 +310,84 @@ int main(int argc, char** argv)
   st.transforms.push_back(tf("console", "touch_right/base", 0.0, -0.2, 0.0, 0.0));
   static_pub.publish(st);
 
+  // udp mode: socket to the receiver, and a socket that swallows its force commands
+  int sock = -1, cmd_sock = -1;
+  sockaddr_in dst{};
+  if (udp)
+  {
+    sock = socket(AF_INET, SOCK_DGRAM, 0);
+    cmd_sock = socket(AF_INET, SOCK_DGRAM, 0);
+    dst.sin_family = AF_INET;
+    dst.sin_port = htons(static_cast<uint16_t>(udp_port));
+    dst.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    sockaddr_in c{};
+    c.sin_family = AF_INET;
+    c.sin_port = htons(static_cast<uint16_t>(cmd_port));
+    c.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (sock < 0 || cmd_sock < 0 || bind(cmd_sock, reinterpret_cast<sockaddr*>(&c), sizeof(c)) != 0)
+    {
+      std::perror("teleop_latency_probe: udp sockets");
+      return 2;
+    }
+  }
+  std::atomic<bool> draining(udp);
+  std::thread drain([&] {
+    if (!udp)
+      return;
+    timeval tv{ 0, 100000 };
+    setsockopt(cmd_sock, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+    uint8_t buf[2048];
+    while (draining)
+      (void)recv(cmd_sock, buf, sizeof(buf), 0);
+  });
+
   ros::AsyncSpinner spinner(1);
   spinner.start();
   ros::WallDuration(2.0).sleep();  // connections
   const auto t_start = std::chrono::steady_clock::now();
   auto next = t_start;
   int k = 0;
+  uint32_t seq = 0;
   double measure_from = 0.0;
   tf2_msgs::TFMessage dyn;
   dyn.transforms.push_back(tf("touch_left/base", "touch_left/stylus", 0, 0, 0.05, 0));
+  const double right_xyz[3] = { -0.12, 0.0, 0.07 };
   while (ros::ok())
   {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     if (t > duration + 2.0)
       break;
-    auto& x = dyn.transforms[0];
-    x.header.stamp = ros::Time::now();
-    x.transform.translation.x = 0.02 * std::sin(2 * M_PI * 0.3 * t);
-    if (t > 2.0)  // first 2 s: warm-up (transparency waits for both poses, start pose)
+    const bool measuring = t > 2.0;  // first 2 s: warm-up (transparency waits for both poses, start pose)
+    if (measuring && measure_from == 0.0)
+      measure_from = ros::Time::now().toSec();
+    const double x = 0.02 * std::sin(2 * M_PI * 0.3 * t);
+    if (udp)
     {
-      if (measure_from == 0.0)
-        measure_from = ros::Time::now().toSec();
-      g_sent[x.header.stamp.toNSec()] = x.header.stamp.toSec();
+      const double left_xyz[3] = { x, 0.0, 0.05 };
+      const std::vector<uint8_t> pkt = statePacket(++seq, t, left_xyz, right_xyz);
+      const double sent = ros::Time::now().toSec();
+      if (measuring)
+      {
+        std::lock_guard<std::mutex> lock(g.mutex);
+        g.udp_sent[seq] = sent;
+      }
+      (void)sendto(sock, pkt.data(), pkt.size(), 0, reinterpret_cast<const sockaddr*>(&dst), sizeof(dst));
     }
-    tf_pub.publish(dyn);
+    else
+    {
+      auto& tr = dyn.transforms[0];
+      tr.header.stamp = ros::Time::now();
+      tr.transform.translation.x = x;
+      if (measuring)
+      {
+        std::lock_guard<std::mutex> lock(g.mutex);
+        g.sample[tr.header.stamp.toNSec()] = tr.header.stamp.toSec();
+      }
+      tf_pub.publish(dyn);
+    }
     if (k % 4 == 0)
     {
+      std::lock_guard<std::mutex> lock(ee_mutex);
       ee.header.stamp = ros::Time::now();
       ee_pub.publish(ee);
     }
@@ -204,57 +395,66 @@ int main(int argc, char** argv)
     next += std::chrono::microseconds(1000);
     std::this_thread::sleep_until(next);
   }
-  ros::WallDuration(0.2).sleep();
+  ros::WallDuration(0.3).sleep();
   spinner.stop();
+  draining = false;
+  drain.join();
 
-  std::printf("\nend-to-end latency from the master TF sample (stamp) to each hop's output, %zu samples sent:\n",
-              g_sent.size());
-  std::printf("| %-36s | %8s | %8s | %8s | %8s | %9s |\n", "hop (node -> topic)", "received", "p50 us", "p99 us",
-              "max us", "hop p99 us");
-  std::printf("|%s|%s|%s|%s|%s|%s|\n", std::string(38, '-').c_str(), std::string(10, '-').c_str(),
-              std::string(10, '-').c_str(), std::string(10, '-').c_str(), std::string(10, '-').c_str(),
-              std::string(11, '-').c_str());
-  const char* names[] = { "1 master_pose", "2 des_twist", "3 tank_twist", "4 target_pose" };
-  const char* labels[] = { "tf_transformer -> master_pose", "transparency -> des_twist", "tank_slave -> tank_twist",
-                           "velocity_integrator -> target_pose" };
-  for (int h = 0; h < 4; ++h)
+  std::lock_guard<std::mutex> lock(g.mutex);
+  const std::vector<std::pair<std::string, std::string>> chain = {
+    { "1 master_pose", "tf_transformer -> master_pose" },
+    { "2 des_twist", "transparency -> des_twist" },
+    { "3 tank_twist", "tank_slave -> tank_twist" },
+    { "4 target_pose", "velocity_integrator -> /mesa_left/target_pose" },
+  };
+  std::printf("\n== %s mode %s ==\n", label.c_str(), mode.c_str());
+  if (udp)
   {
-    std::vector<double> lat, hop;
-    for (const auto& kv : g_arr[names[h]].by_stamp)
+    // TF stamp (= receiver's receive stamp) -> UDP send time / TF sample time of measured packets
+    std::map<uint64_t, double> from_udp, from_tf;
+    for (const auto& kv : g.seq_of)
     {
-      lat.push_back((kv.second - g_sent[kv.first]) * 1e6);
-      if (h > 0)
-      {
-        const auto& prev = g_arr[names[h - 1]].by_stamp;
-        auto it = prev.find(kv.first);
-        if (it != prev.end())
-          hop.push_back((kv.second - it->second) * 1e6);
-      }
-      else
-      {
-        hop.push_back((kv.second - g_sent[kv.first]) * 1e6);
-      }
+      auto it = g.udp_sent.find(kv.second);
+      if (it == g.udp_sent.end())
+        continue;
+      from_udp[kv.first] = it->second;
+      from_tf[kv.first] = kv.first * 1e-9;
     }
-    std::printf("| %-36s | %8zu | %8.0f | %8.0f | %8.0f | %9.0f |\n", labels[h], lat.size(), pct(lat, 50), pct(lat, 99),
-                pct(lat, 100), pct(hop, 99));
+    std::printf("\nUDP packets sent in the window: %zu, matched to a receiver sample: %zu\n", g.udp_sent.size(),
+                from_udp.size());
+    std::vector<std::pair<std::string, std::string>> full = chain;
+    full.insert(full.begin(), { "0 touchball_state", "touchball_receiver -> /touchball/left/state" });
+    printLatencyTable("latency from the UDP packet send (touchball state packet) to each hop's output", full, from_udp);
+    printLatencyTable("latency from the receiver's TF sample stamp to each hop's output", chain, from_tf);
+  }
+  else
+  {
+    printLatencyTable("latency from the master TF sample (stamp) to each hop's output", chain, g.sample);
   }
 
   std::printf("\noutput rate and period jitter (|period - 1 ms|) over the measurement window:\n");
   std::printf("| %-32s | %9s | %12s | %12s |\n", "topic", "rate Hz", "jitter p50 us", "jitter p99 us");
   std::printf("|%s|%s|%s|%s|\n", std::string(34, '-').c_str(), std::string(11, '-').c_str(),
               std::string(14, '-').c_str(), std::string(14, '-').c_str());
-  for (const char* key : { "1 master_pose", "4 target_pose", "wrench_cmd", "tank_master/energy" })
+  for (const char* key : { "0 touchball_state", "1 master_pose", "4 target_pose", "wrench_cmd", "tank_master/energy" })
   {
+    if (!udp && std::string(key) == "0 touchball_state")
+      continue;
     std::vector<double> ts;
-    for (double t : g_arr[key].times)
-      if (t >= measure_from)
-        ts.push_back(t);
+    for (double tt : g.arr[key].times)
+      if (tt >= measure_from)
+        ts.push_back(tt);
     std::vector<double> jit;
     for (std::size_t i = 1; i < ts.size(); ++i)
       jit.push_back(std::fabs(ts[i] - ts[i - 1] - 1e-3) * 1e6);
     const double rate = ts.size() > 1 ? (ts.size() - 1) / (ts.back() - ts.front()) : 0.0;
     std::printf("| %-32s | %9.1f | %12.0f | %12.0f |\n", key, rate, pct(jit, 50), pct(jit, 99));
   }
-  coreCosts();
+  if (sock >= 0)
+    close(sock);
+  if (cmd_sock >= 0)
+    close(cmd_sock);
+  if (label.find("nocore") == std::string::npos)
+    coreCosts();
   return 0;
 }

@@ -1,12 +1,13 @@
 /**
  * @file node_common.h
  * @brief Shared helpers of the saras_teleop node adapters: validated parameters, message <-> Eigen
- *        conversions, the ComponentStatus heartbeat.
+ *        conversions, the ComponentStatus heartbeat, the nodelet wrapper.
  */
 #ifndef SARAS_TELEOP_NODE_COMMON_H
 #define SARAS_TELEOP_NODE_COMMON_H
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/Wrench.h>
+#include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <saras_msgs/ComponentStatus.h>
 
@@ -165,25 +167,32 @@ private:
   bool published_ = false;
 };
 
-/// Run a node object; a std::exception at start-up (bad parameter) ends the process with status 1.
+/**
+ * Nodelet wrapper of a node class `Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)`.
+ * The node object lives as long as the nodelet; all its callbacks (subscriptions and timers) run on
+ * the nodelet's single-threaded callback queue, so the node class needs no locking. A std::exception
+ * from the constructor (bad parameter) is logged with ROS_FATAL naming the nodelet and rethrown:
+ * the manager refuses the nodelet and the loader (`nodelet load` or the standalone executable)
+ * exits non-zero.
+ */
 template <class Node>
-int runNode(int argc, char** argv, const char* name)
+class NodeletAdapter : public nodelet::Nodelet
 {
-  ros::init(argc, argv, name);
-  ros::NodeHandle nh, pnh("~");  // outlives the node object, so logging still works in the catch
-  try
+private:
+  void onInit() override
   {
-    Node node(nh, pnh);
-    ros::spin();
+    try
+    {
+      node_.reset(new Node(getNodeHandle(), getPrivateNodeHandle(), getName().substr(getName().empty() ? 0 : 1)));
+    }
+    catch (const std::exception& e)
+    {
+      ROS_FATAL("%s: %s", getName().c_str(), e.what());
+      throw;
+    }
   }
-  catch (const std::exception& e)
-  {
-    ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), e.what());
-    ros::console::shutdown();
-    return 1;
-  }
-  return 0;
-}
+  std::unique_ptr<Node> node_;
+};
 
 }  // namespace node
 }  // namespace saras_teleop

@@ -37,6 +37,7 @@
 
 #include "node_common.h"
 #include "saras_teleop/energy_tank.h"
+#include "saras_teleop/message_pool.h"
 
 namespace saras_teleop
 {
@@ -86,7 +87,9 @@ template <class Traits>
 class TankNode
 {
 public:
-  TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : status_(nh, std::string("teleop/") + Traits::kName)
+  /// @param name node or nodelet name (the heartbeat component stays "teleop/<tank_master|tank_slave>")
+  TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
+    : status_(nh, std::string("teleop/") + Traits::kName)
   {
     TankParams p;
     p.T_init = paramDouble(pnh, "T_init", p.T_init);
@@ -115,7 +118,9 @@ public:
     {
       Port& pt = ports_[i];
       pt.name = channels[i];
-      pt.out.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
+      typename Traits::Output proto;
+      proto.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
+      pt.pool.reset(new MessagePool<typename Traits::Output>(kPoolSize, proto));
       pt.pub = nh.advertise<typename Traits::Output>(channels[i] + "/" + Traits::kOutput, 10);
       pt.sub_des = nh.subscribe<typename Traits::Desired>(
           channels[i] + "/" + Traits::kDesired, 10,
@@ -141,7 +146,7 @@ private:
     std::string name;
     ros::Subscriber sub_des, sub_conj;
     ros::Publisher pub;
-    typename Traits::Output out;
+    std::unique_ptr<MessagePool<typename Traits::Output>> pool;  // zero-copy publishing in a manager
     ros::Time t_des, t_conj;  // arrival times (ROS clock)
     ros::Time stamp;          // header stamp propagated to the output
     Vector6d des = Vector6d::Zero(), conj = Vector6d::Zero();
@@ -241,9 +246,10 @@ private:
   void publishPort(std::size_t i, const ros::Time& stamp)
   {
     Port& pt = ports_[i];
-    pt.out.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
-    Traits::fill(tank_->output(i), pt.out);
-    pt.pub.publish(pt.out);
+    const boost::shared_ptr<typename Traits::Output> out = pt.pool->next();
+    out->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    Traits::fill(tank_->output(i), *out);
+    pt.pub.publish(out);
   }
 
   void stepAndPublish(std::size_t i)
@@ -298,6 +304,7 @@ private:
     status_.update(level, msg, 0.0, received_, rejected_);
   }
 
+  static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<EnergyTank> tank_;
   std::vector<Port> ports_;
   ros::Subscriber pin_sub_, ereq_sub_;

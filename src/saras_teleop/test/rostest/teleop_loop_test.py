@@ -2,7 +2,8 @@
 """Closed-loop rostest of the real teleop nodes with a fake master (TF touch_left/stylus moving on a
 sinusoid) and a fake SARAS arm (ee_pose = last target_pose). Checks tracking of the scaled master in
 the slave base frame, the force command, tank energies, bad-input robustness and the stale-link hold.
-Parameters (~): expect_delay [s] (one-way channel delay configured in the .test), check_stale (bool)."""
+Parameters (~): expect_delay [s] (one-way channel delay configured in the .test), check_stale (bool),
+expect_manager (nodelet manager that must hold every teleop nodelet; '' = do not check)."""
 import math
 import subprocess
 import sys
@@ -242,6 +243,30 @@ class TeleopLoopTest(unittest.TestCase):
             moving = [t[3] for t in fx.targets[-1000:]]
         self.assertGreater(max(moving) - min(moving), 1e-3)  # resumed (re-indexed, no jump check below)
         fx.run = False
+
+    def test_nodelets_share_one_manager(self):
+        """Every teleop output is published by the manager process (the nodelets run inside it: their
+        intra-process links are zero-copy), none by the nodelet loader processes."""
+        manager = rospy.get_param('~expect_manager', '')
+        if not manager:
+            self.skipTest('standalone layout: no manager expected')
+        import rosgraph
+        topics = ['/teleop/left/master_pose', '/teleop/left/master_twist', '/teleop/left/des_twist',
+                  '/teleop/left/des_wrench', '/teleop/left/tank_twist', '/teleop/left/tank_wrench',
+                  '/mesa_left/target_pose', '/touchball/left/wrench_cmd', '/teleop/right/master_pose',
+                  '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
+        if self.delay > 0:
+            topics.append('/teleop/left/master_pose_delayed')
+        master = rosgraph.Master('/teleop_loop_test')
+        pubs = {}
+        end = time.time() + 20.0
+        while time.time() < end:
+            pubs = {t: sorted(set(n) - {rospy.get_name()}) for t, n in master.getSystemState()[0]}
+            if all(t in pubs for t in topics):
+                break
+            time.sleep(0.5)
+        for t in topics:
+            self.assertEqual(pubs.get(t), [manager], t)
 
     def test_bad_parameter_exits_with_message(self):
         p = subprocess.run(['rosrun', 'saras_teleop', 'tank_master', '__name:=bad_tank', '_T_req:=0.5'],

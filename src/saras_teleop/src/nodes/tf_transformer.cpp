@@ -1,6 +1,6 @@
 /**
  * tf_transformer: master pose/twist in the slave base frame, force command to the Touch frame
- * (one instance per channel).
+ * (one instance per channel). Nodelet saras_teleop/TfTransformer; executable tf_transformer.
  *
  * Subscribes /tf and /tf_static itself (TCP_NODELAY, own tf2::BufferCore) so that each new master
  * sample is processed the moment it arrives: lookup reference_frame <- tracked_frame at the latest
@@ -22,9 +22,11 @@
 #include <geometry_msgs/WrenchStamped.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
+#include <pluginlib/class_list_macros.hpp>
 #include <tf2_msgs/TFMessage.h>
 
 #include "node_common.h"
+#include "saras_teleop/message_pool.h"
 #include "saras_teleop/twist_estimator.h"
 
 namespace saras_teleop
@@ -34,10 +36,11 @@ namespace node
 class TfTransformerNode
 {
 public:
-  TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+  /// @param name component name in the heartbeat (node or nodelet name without the leading '/')
+  TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
     : buffer_(ros::Duration(5.0))
     , est_(paramPositive(pnh, "low_pass_cutoff", 50.0), paramPositive(pnh, "max_gap", 0.1))
-    , status_(nh, ros::this_node::getName().substr(1))
+    , status_(nh, name)
   {
     reference_ = paramString(pnh, "reference_frame", "mesa_left/sbs_world");
     tracked_ = paramString(pnh, "tracked_frame", "touch_left/stylus");
@@ -50,8 +53,14 @@ public:
     max_force_ = paramPositive(pnh, "max_force", 3.3);
     max_torque_ = paramPositive(pnh, "max_torque", 0.1);
 
-    pose_.header.frame_id = twist_.header.frame_id = reference_;
-    wrench_.header.frame_id = device_base_;
+    geometry_msgs::PoseStamped pose;
+    geometry_msgs::TwistStamped twist;
+    geometry_msgs::WrenchStamped wrench;
+    pose.header.frame_id = twist.header.frame_id = reference_;
+    wrench.header.frame_id = device_base_;
+    pose_pool_.reset(new MessagePool<geometry_msgs::PoseStamped>(kPoolSize, pose));
+    twist_pool_.reset(new MessagePool<geometry_msgs::TwistStamped>(kPoolSize, twist));
+    wrench_pool_.reset(new MessagePool<geometry_msgs::WrenchStamped>(kPoolSize, wrench));
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("master_pose", 10);
     twist_pub_ = nh.advertise<geometry_msgs::TwistStamped>("master_twist", 10);
     wrench_pub_ = nh.advertise<geometry_msgs::WrenchStamped>("wrench_cmd", 10);
@@ -162,14 +171,15 @@ private:
       return;
     ++received_;
     last_sample_wall_ = ros::Time::now();
-    pose_.header.stamp = twist_.header.stamp = t.header.stamp;
-    pose_.pose.position.x = p.x;
-    pose_.pose.position.y = p.y;
-    pose_.pose.position.z = p.z;
-    pose_.pose.orientation = q;
-    fromVec(est_.twist(), twist_.twist);
-    pose_pub_.publish(pose_);
-    twist_pub_.publish(twist_);
+    // zero-copy to nodelets in the same manager: publish pooled shared messages
+    const boost::shared_ptr<geometry_msgs::PoseStamped> pose = pose_pool_->next();
+    pose->header.stamp = t.header.stamp;
+    pose->pose.position.x = p.x;
+    pose->pose.position.y = p.y;
+    pose->pose.position.z = p.z;
+    pose->pose.orientation = q;
+    pose_pub_.publish(pose);
+    publishTwist(t.header.stamp);
   }
 
   void onWrench(const geometry_msgs::WrenchStamped::ConstPtr& m)
@@ -187,6 +197,14 @@ private:
     publishWrench(m->header.stamp);
   }
 
+  void publishTwist(const ros::Time& stamp)
+  {
+    const boost::shared_ptr<geometry_msgs::TwistStamped> twist = twist_pool_->next();
+    twist->header.stamp = stamp;
+    fromVec(est_.twist(), twist->twist);
+    twist_pub_.publish(twist);
+  }
+
   void publishWrench(const ros::Time& stamp)
   {
     if (!have_rotation_)
@@ -197,9 +215,10 @@ private:
       w.head<3>() *= max_force_ / nf;
     if (nt > max_torque_)
       w.tail<3>() *= max_torque_ / nt;
-    wrench_.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
-    fromVec(w, wrench_.wrench);
-    wrench_pub_.publish(wrench_);
+    const boost::shared_ptr<geometry_msgs::WrenchStamped> wrench = wrench_pool_->next();
+    wrench->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    fromVec(w, wrench->wrench);
+    wrench_pub_.publish(wrench);
     t_wrench_pub_ = ros::Time::now();
   }
 
@@ -223,9 +242,7 @@ private:
     if (stale && est_.twist().norm() > 0.0)
     {
       est_.clear();
-      fromVec(est_.twist(), twist_.twist);
-      twist_.header.stamp = now;
-      twist_pub_.publish(twist_);
+      publishTwist(now);
     }
     if (t_wrench_.isZero() || (now - t_wrench_).toSec() > wrench_timeout_)
       w_ref_.setZero();  // no fresh command: no force
@@ -245,9 +262,10 @@ private:
   bool have_rotation_ = false;
   KDL::Rotation R_dev_ref_;
   Vector6d w_ref_ = Vector6d::Zero();
-  geometry_msgs::PoseStamped pose_;
-  geometry_msgs::TwistStamped twist_;
-  geometry_msgs::WrenchStamped wrench_;
+  static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
+  std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
+  std::unique_ptr<MessagePool<geometry_msgs::TwistStamped>> twist_pool_;
+  std::unique_ptr<MessagePool<geometry_msgs::WrenchStamped>> wrench_pool_;
   ros::Publisher pose_pub_, twist_pub_, wrench_pub_;
   ros::Subscriber tf_sub_, tf_static_sub_, wrench_sub_;
   ros::SteadyTimer timer_;
@@ -255,10 +273,12 @@ private:
   uint64_t received_ = 0, rejected_ = 0;
 };
 
+
+/// Nodelet `saras_teleop/TfTransformer` (nodelet_plugins.xml).
+class TfTransformerNodelet : public NodeletAdapter<TfTransformerNode>
+{
+};
 }  // namespace node
 }  // namespace saras_teleop
 
-int main(int argc, char** argv)
-{
-  return saras_teleop::node::runNode<saras_teleop::node::TfTransformerNode>(argc, argv, "tf_transformer");
-}
+PLUGINLIB_EXPORT_CLASS(saras_teleop::node::TfTransformerNodelet, nodelet::Nodelet)

@@ -1,5 +1,6 @@
 /**
  * transparency: transparency layer for every channel in ~channels (one instance).
+ * Nodelet saras_teleop/Transparency; executable transparency.
  *
  * Per channel c (relative names): sub c/master_pose (PoseStamped, slave base frame), c/master_twist
  * (TwistStamped), c/slave_pose (PoseStamped, measured slave pose), c/device_state
@@ -19,10 +20,12 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
+#include <pluginlib/class_list_macros.hpp>
 #include <saras_msgs/ComponentStatus.h>
 #include <saras_msgs/HapticDeviceState.h>
 
 #include "node_common.h"
+#include "saras_teleop/message_pool.h"
 #include "saras_teleop/transparency.h"
 
 namespace saras_teleop
@@ -32,7 +35,9 @@ namespace node
 class TransparencyNode
 {
 public:
-  TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : status_(nh, "teleop/transparency")
+  /// @param name node or nodelet name (the heartbeat component stays "teleop/transparency")
+  TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
+    : status_(nh, "teleop/transparency")
   {
     TransparencyParams p;
     p.pose_error_gain = paramDouble(pnh, "pose_error_gain", p.pose_error_gain);
@@ -54,7 +59,11 @@ public:
       const std::string& n = channels[i];
       c.name = n;
       c.core.reset(new TransparencyChannel(p));
-      c.wrench.header.frame_id = c.twist.header.frame_id = "mesa_" + n + "/sbs_world";
+      geometry_msgs::WrenchStamped wrench;
+      geometry_msgs::TwistStamped twist;
+      wrench.header.frame_id = twist.header.frame_id = "mesa_" + n + "/sbs_world";
+      c.wrench_pool.reset(new MessagePool<geometry_msgs::WrenchStamped>(kPoolSize, wrench));
+      c.twist_pool.reset(new MessagePool<geometry_msgs::TwistStamped>(kPoolSize, twist));
       c.pub_wrench = nh.advertise<geometry_msgs::WrenchStamped>(n + "/des_wrench", 10);
       c.pub_twist = nh.advertise<geometry_msgs::TwistStamped>(n + "/des_twist", 10);
       c.subs.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
@@ -90,8 +99,8 @@ private:
     std::unique_ptr<TransparencyChannel> core;
     std::vector<ros::Subscriber> subs;
     ros::Publisher pub_wrench, pub_twist;
-    geometry_msgs::WrenchStamped wrench;
-    geometry_msgs::TwistStamped twist;
+    std::unique_ptr<MessagePool<geometry_msgs::WrenchStamped>> wrench_pool;
+    std::unique_ptr<MessagePool<geometry_msgs::TwistStamped>> twist_pool;
     ros::Time t_master, t_slave, t_fixture, t_last;
     bool clutch = false, device_stale = false;
     TransparencyChannel::State state = TransparencyChannel::WAITING;
@@ -158,16 +167,19 @@ private:
     c.core->setLinkOk(link_ok_ && !c.device_stale && (fresh || c.state == TransparencyChannel::WAITING));
     Vector6d w, v;
     c.state = c.core->update(w, v);
-    const ros::Time st = stamp.isZero() ? now : stamp;
-    c.wrench.header.stamp = st;
-    c.twist.header.stamp = st;
-    fromVec(w, c.wrench.wrench);
-    fromVec(v, c.twist.twist);
     const bool publish = from_timer ? c.state == TransparencyChannel::HOLD : c.state != TransparencyChannel::WAITING;
     if (publish)
     {
-      c.pub_twist.publish(c.twist);
-      c.pub_wrench.publish(c.wrench);
+      const ros::Time st = stamp.isZero() ? now : stamp;
+      // zero-copy to nodelets in the same manager: pooled shared messages
+      const boost::shared_ptr<geometry_msgs::TwistStamped> twist = c.twist_pool->next();
+      twist->header.stamp = st;
+      fromVec(v, twist->twist);
+      c.pub_twist.publish(twist);  // the slave path first: it is the latency-critical one
+      const boost::shared_ptr<geometry_msgs::WrenchStamped> wrench = c.wrench_pool->next();
+      wrench->header.stamp = st;
+      fromVec(w, wrench->wrench);
+      c.pub_wrench.publish(wrench);
     }
     c.t_last = now;
   }
@@ -200,6 +212,7 @@ private:
     status_.update(level, msg.empty() ? "running" : msg, age, received_, rejected_);
   }
 
+  static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::vector<Channel> ch_;
   ros::Subscriber link_sub_;
   ros::SteadyTimer timer_;
@@ -209,10 +222,12 @@ private:
   uint64_t received_ = 0, rejected_ = 0;
 };
 
+/// Nodelet `saras_teleop/Transparency` (nodelet_plugins.xml).
+class TransparencyNodelet : public NodeletAdapter<TransparencyNode>
+{
+};
+
 }  // namespace node
 }  // namespace saras_teleop
 
-int main(int argc, char** argv)
-{
-  return saras_teleop::node::runNode<saras_teleop::node::TransparencyNode>(argc, argv, "transparency");
-}
+PLUGINLIB_EXPORT_CLASS(saras_teleop::node::TransparencyNodelet, nodelet::Nodelet)

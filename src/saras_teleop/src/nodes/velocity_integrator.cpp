@@ -1,5 +1,6 @@
 /**
  * velocity_integrator: slave pose set-point from the implemented slave twist (one per channel).
+ * Nodelet saras_teleop/VelocityIntegrator; executable velocity_integrator.
  *
  * Waits for the slave start pose on start_pose (PoseStamped; error after ~start_timeout, keeps
  * waiting without publishing), then integrates tank_twist (TwistStamped, slave base frame) with
@@ -18,10 +19,12 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/TwistStamped.h>
+#include <pluginlib/class_list_macros.hpp>
 #include <saras_msgs/ComponentStatus.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "node_common.h"
+#include "saras_teleop/message_pool.h"
 #include "saras_teleop/velocity_integrator.h"
 
 namespace saras_teleop
@@ -45,8 +48,9 @@ IntegratorParams readParams(const ros::NodeHandle& pnh)
 class VelocityIntegratorNode
 {
 public:
-  VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-    : vi_(readParams(pnh)), status_(nh, ros::this_node::getName().substr(1))
+  /// @param name component name in the heartbeat (node or nodelet name without the leading '/')
+  VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
+    : vi_(readParams(pnh)), status_(nh, name)
   {
     const double rate = paramPositive(pnh, "rate", 1000.0);
     period_ = 1.0 / rate;
@@ -54,7 +58,10 @@ public:
     input_timeout_ = paramPositive(pnh, "input_timeout", 0.05);
     max_step_ = paramPositive(pnh, "max_step", 0.05);
     frame_ = paramString(pnh, "frame_id", "mesa_left/sbs_world");
-    tf_.header.frame_id = pose_.header.frame_id = frame_;
+    tf_.header.frame_id = frame_;
+    geometry_msgs::PoseStamped pose;
+    pose.header.frame_id = frame_;
+    pose_pool_.reset(new MessagePool<geometry_msgs::PoseStamped>(kPoolSize, pose));
     tf_.child_frame_id = paramString(pnh, "setpoint_frame", "mesa_left/setpoint");
     int dec = 10;
     pnh.param("tf_decimation", dec, 10);
@@ -124,21 +131,22 @@ private:
     if (!vi_.started())
       return;
     const KDL::Frame& f = vi_.pose();
-    pose_.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
-    pose_.pose.position.x = f.p.x();
-    pose_.pose.position.y = f.p.y();
-    pose_.pose.position.z = f.p.z();
-    f.M.GetQuaternion(pose_.pose.orientation.x, pose_.pose.orientation.y, pose_.pose.orientation.z,
-                      pose_.pose.orientation.w);
-    pose_pub_.publish(pose_);
+    const boost::shared_ptr<geometry_msgs::PoseStamped> pose = pose_pool_->next();  // zero-copy in a manager
+    pose->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+    pose->pose.position.x = f.p.x();
+    pose->pose.position.y = f.p.y();
+    pose->pose.position.z = f.p.z();
+    f.M.GetQuaternion(pose->pose.orientation.x, pose->pose.orientation.y, pose->pose.orientation.z,
+                      pose->pose.orientation.w);
+    pose_pub_.publish(pose);
     t_pub_ = ros::Time::now();
     if (++count_ % tf_decimation_ == 0)
     {
-      tf_.header.stamp = pose_.header.stamp;
+      tf_.header.stamp = pose->header.stamp;
       tf_.transform.translation.x = f.p.x();
       tf_.transform.translation.y = f.p.y();
       tf_.transform.translation.z = f.p.z();
-      tf_.transform.rotation = pose_.pose.orientation;
+      tf_.transform.rotation = pose->pose.orientation;
       broadcaster_.sendTransform(tf_);
     }
   }
@@ -176,7 +184,8 @@ private:
   unsigned long count_ = 0;
   Vector6d twist_ = Vector6d::Zero();
   bool link_ok_ = true, hold_ = true;
-  geometry_msgs::PoseStamped pose_;
+  static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
+  std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;
   ros::Publisher pose_pub_;
   ros::Subscriber start_sub_, twist_sub_, link_sub_;
@@ -185,10 +194,12 @@ private:
   uint64_t received_ = 0, rejected_ = 0;
 };
 
+/// Nodelet `saras_teleop/VelocityIntegrator` (nodelet_plugins.xml).
+class VelocityIntegratorNodelet : public NodeletAdapter<VelocityIntegratorNode>
+{
+};
+
 }  // namespace node
 }  // namespace saras_teleop
 
-int main(int argc, char** argv)
-{
-  return saras_teleop::node::runNode<saras_teleop::node::VelocityIntegratorNode>(argc, argv, "velocity_integrator");
-}
+PLUGINLIB_EXPORT_CLASS(saras_teleop::node::VelocityIntegratorNodelet, nodelet::Nodelet)

@@ -1,5 +1,6 @@
 /**
  * channel: delay / jitter / loss model on the master <-> slave link, for experiments and the demo.
+ * Nodelet saras_teleop/Channel; executable channel.
  *
  * For every topic T in ~topics (any message type, relayed with topic_tools::ShapeShifter) it
  * subscribes T and republishes on T + ~suffix after ~delay_ms plus U(0, ~jitter_ms), dropping
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <pluginlib/class_list_macros.hpp>
 #include <topic_tools/shape_shifter.h>
 
 #include "node_common.h"
@@ -24,7 +26,7 @@ namespace node
 class ChannelNode
 {
 public:
-  ChannelNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh)
+  ChannelNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/) : nh_(nh)
   {
     ChannelParams p;
     p.delay = paramDouble(pnh, "delay_ms", 0.0) * 1e-3;
@@ -102,10 +104,12 @@ private:
   ros::SteadyTimer timer_;
 };
 
+/// Nodelet `saras_teleop/Channel` (nodelet_plugins.xml).
+class ChannelNodelet : public NodeletAdapter<ChannelNode>
+{
+};
+
 }  // namespace node
 }  // namespace saras_teleop
 
-int main(int argc, char** argv)
-{
-  return saras_teleop::node::runNode<saras_teleop::node::ChannelNode>(argc, argv, "channel");
-}
+PLUGINLIB_EXPORT_CLASS(saras_teleop::node::ChannelNodelet, nodelet::Nodelet)
