@@ -1,5 +1,6 @@
 """Simulator server and client over a real Socket.IO connection on 127.0.0.1 (no ROS)."""
 import socket
+import threading
 import time
 
 import numpy as np
@@ -102,3 +103,122 @@ def test_commands_refused_while_disconnected():
             client.call(proto.EV_HOLD, {'id': 1})
     finally:
         client.stop()
+
+
+# ---------------------------------------------------------------------------- streaming under load
+def _stream(state_rate=250.0, **server_kw):
+    model = SarasArmModel(sak.load('left', PA), max_velocity=2.0)
+    port = _free_port()
+    server = SarasArmServer(model, port=port, rate=500.0, state_rate=state_rate, **server_kw)
+    server.start_in_thread()
+    return model, server, port
+
+
+def _stall_server(server, seconds):
+    """Block the server's event loop (a descheduled or busy simulator process)."""
+    server._loop.call_soon_threadsafe(time.sleep, seconds)     # pylint: disable=protected-access
+
+
+def test_states_in_order_from_one_thread_without_gaps():
+    model, server, port = _stream()
+    seen = []
+    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+                            on_state=lambda s: seen.append((threading.get_ident(), s['seq'], s['time'])))
+    client.start()
+    try:
+        assert client.wait_connected(5.0)
+        assert _wait(lambda: len(seen) > 150, 5.0)
+    finally:
+        client.stop()
+        server.stop()
+    threads = set(t for t, _, _ in seen)
+    assert len(threads) == 1                           # one dispatcher, not a thread per message
+    seqs = [s for _, s, _ in seen]
+    assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))   # in order, none lost (fast consumer)
+    assert client.conflated == 0 and client.bad_states == 0
+    # every sample sits on the 250 Hz grid (catch-up keeps exact sample instants)
+    dt = np.diff([t for _, _, t in seen])
+    assert np.allclose(dt, 1.0 / 250.0, atol=1e-6), (dt.min(), dt.max(), server.missed)
+
+
+def test_server_stall_keeps_rate_and_sample_times():
+    # a 60 ms stall of the simulator (15 periods at 250 Hz): every missed sample is still sent,
+    # integrated to and stamped with its own instant
+    model, server, port = _stream(max_catch_up=50)
+    seen = []
+    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+                            on_state=seen.append)
+    client.start()
+    try:
+        assert client.wait_connected(5.0)
+        far = model.q.copy()
+        far[:2] += 0.3
+        assert client.send_target(model.tip_in_base(far)[:3, 3])   # moving: samples differ
+        assert _wait(lambda: len(seen) > 20, 5.0)
+        n0 = len(seen)
+        _stall_server(server, 0.06)
+        for k in range(5):             # commands queued during the stall: they must not make
+            near = model.q.copy()      # the owed samples collapse onto their arrival time
+            near[:2] += 0.2 + 0.01 * k
+            client.send_target(model.tip_in_base(near)[:3, 3])
+            time.sleep(0.005)
+        assert _wait(lambda: len(seen) > n0 + 40, 5.0)
+    finally:
+        client.stop()
+        server.stop()
+    times = np.array([s['time'] for s in seen[n0 - 5:]])
+    assert server.missed == 0
+    d = np.diff(times)
+    assert np.allclose(d, 1.0 / 250.0, atol=1e-6), [(i, 1e3 * x) for i, x in enumerate(d)
+                                                     if abs(x - 0.004) > 1e-6]
+    # the joints of each sample are the model integrated to that instant: motion is continuous
+    # (per-sample joint change never exceeds what the velocity limit allows in one period)
+    q = np.array([s['joints'] for s in seen[n0 - 5:]])
+    assert np.all(np.abs(np.diff(q[:, :2], axis=0)) <= 2.0 / 250.0 + 1e-9)
+
+
+def test_slow_consumer_bounded_queue_and_link_kept():
+    # a consumer 5x slower than the stream for 2.5 s (> ping_interval + ping_timeout used to be
+    # enough to drop the link behind the queued states): the link stays up, the oldest states are
+    # dropped and counted, order is kept and the delivered state is never more than
+    # state_queue samples old
+    model, server, port = _stream(ping_interval=0.2, ping_timeout=1.0)
+    seen = []
+    lag = []
+
+    def slow(s):
+        lag.append(server.state_seq - s['seq'])
+        seen.append(s['seq'])
+        time.sleep(0.02)
+
+    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+                            on_state=slow, state_queue=5)
+    client.start()
+    try:
+        assert client.wait_connected(5.0)
+        time.sleep(2.5)
+        assert client.connected and client.connections == 1 and len(server.sids) == 1
+    finally:
+        client.stop()
+        server.stop()
+    assert client.conflated > 100
+    assert seen == sorted(seen) and len(set(seen)) == len(seen)
+    assert client.received_states - client.conflated - client.states <= 5
+    # bounded lag: queue (5) + samples in flight (socket buffers, a loaded host); an unbounded
+    # queue would be ~2.5 s * (250 - 50) Hz = 500 samples behind by the end
+    assert max(lag[len(lag) // 2:]) <= 30, lag
+
+
+def test_server_stall_shorter_than_ping_timeout_keeps_link():
+    model, server, port = _stream(ping_interval=0.2, ping_timeout=1.5)
+    client = SarasArmClient('http://127.0.0.1:%d' % port, backoff_initial=0.05, backoff_max=0.1)
+    client.start()
+    try:
+        assert client.wait_connected(5.0)
+        _stall_server(server, 1.0)
+        time.sleep(2.0)
+        assert client.connected and client.connections == 1
+    finally:
+        client.stop()
+        server.stop()
+

@@ -130,3 +130,47 @@ def test_wrench_latch_clamps_ages_and_rejects_nan():
     assert latch.get(1.11) == tp.ZERO_COMMAND
     assert not latch.set((float('nan'), 0, 0), (0, 0, 0), 2.0)
     assert latch.get(2.0) == tp.ZERO_COMMAND and latch.rejected == 1
+
+
+def _reference_twist(samples, cutoff_hz):
+    """Vector form of the estimator (quat_mul / quat_log_vec), independent of the scalar code."""
+    from saras_drivers.touchball_link import quat_conj, quat_log_vec
+    tau = 1.0 / (2.0 * math.pi * cutoff_hz)
+    lin, ang = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    from saras_drivers.touchball_link import quat_mul
+    for (t0, p0, q0), (t1, p1, q1) in zip(samples, samples[1:]):
+        dt = t1 - t0
+        v = [(b - a) / dt for a, b in zip(p0, p1)]
+        w = [c / dt for c in quat_log_vec(quat_mul(q1, quat_conj(q0)))]
+        a = dt / (dt + tau)
+        lin = tuple(l + a * (n - l) for l, n in zip(lin, v))
+        ang = tuple(l + a * (n - l) for l, n in zip(ang, w))
+    return lin, ang
+
+
+def test_scalar_twist_matches_vector_reference_on_random_motion():
+    rng = random.Random(3)
+    samples = []
+    for k in range(200):
+        t = k * 0.001 + rng.uniform(0, 2e-4)
+        q = [math.sin(0.3 * t + i) for i in range(4)]
+        n = math.sqrt(sum(x * x for x in q))
+        if k % 50 == 7:
+            q = [-x for x in q]                                # same rotation, other hemisphere
+        samples.append((t, tuple(rng.uniform(-0.1, 0.1) for _ in range(3)), tuple(x / n for x in q)))
+    est = TwistEstimator(cutoff_hz=40.0)
+    for t, p, q in samples:
+        lin, ang = est.update(t, p, q)
+    rlin, rang = _reference_twist(samples, 40.0)
+    assert lin == pytest.approx(rlin, rel=1e-9, abs=1e-12)
+    assert ang == pytest.approx(rang, rel=1e-9, abs=1e-12)
+
+
+def test_accept_fast_path_state_and_last_packet():
+    link = TouchballLink(SRC)
+    assert link.accept(_pkt(7), SRC, 0.0) and link.seq == 7 and link.gap == 0
+    assert link.devices[0][:7] == (0.0, 0.0, 0.1, 0.0, 0.0, 0.0, 1.0)
+    assert link.last_packet == tp.unpack_state(_pkt(7))
+    assert not link.accept(b'garbage', SRC, 0.001) and link.rejected['size'] == 1
+    assert not link.accept(None, SRC, 0.001) and link.rejected['size'] == 2   # not even bytes
+    assert link.seq == 7 and link.received == 1                 # rejected input changed nothing

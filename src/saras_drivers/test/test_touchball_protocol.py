@@ -102,3 +102,61 @@ def test_sequence_tracker_gaps_duplicates_reorder_and_wrap():
     assert s.accept(0xFFFFFFFF) == 0
     assert s.accept(1) == 1                               # wrapped, 0 missing
     assert s.gaps == 4
+
+
+def _reference_decode(data):
+    """Independent field-by-field decode (hand offsets), for the single-struct fast path."""
+    seq, t = struct.unpack_from('<Id', data, 8)
+    devs = []
+    for off in (20, 88):
+        v = struct.unpack_from('<8dI', data, off)
+        n = math.sqrt(sum(x * x for x in v[3:7]))
+        devs.append(v[0:3] + tuple(x / n for x in v[3:7]) + v[7:9])
+    return seq, t, devs[0], devs[1]
+
+
+def test_decode_state_fast_path_matches_field_by_field_decode():
+    import random
+    rng = random.Random(7)
+    for k in range(300):
+        devs = []
+        for _ in range(2):
+            q = [rng.gauss(0, 1) for _ in range(4)]
+            n = math.sqrt(sum(x * x for x in q))
+            devs.append(tp.DeviceState(tuple(rng.uniform(-1, 1) for _ in range(3)),
+                                       tuple(x / n * (1 + rng.uniform(-5e-4, 5e-4)) for x in q),
+                                       rng.uniform(0, 1), rng.random() < 0.5, rng.random() < 0.5))
+        data = tp.pack_state(rng.getrandbits(32), rng.uniform(0, 1e9), devs)
+        seq, t, left, right = tp.decode_state(data)
+        rseq, rt, rleft, rright = _reference_decode(data)
+        assert (seq, t) == (rseq, rt)
+        assert left == pytest.approx(rleft, rel=0, abs=1e-15)
+        assert right == pytest.approx(rright, rel=0, abs=1e-15)
+        assert left[8] == (1 if devs[0].clutch else 0) | (2 if devs[0].clip_button else 0)
+
+
+def test_decode_state_huge_finite_values_are_not_mistaken_for_non_finite():
+    # the fast finiteness test sums the fields; 1e308 + 1e308 overflows to inf, the exact
+    # fallback must still accept the (absurd but finite) packet
+    d = tp.DeviceState((1e308, 1e308, 1e308), (0.0, 0.0, 0.0, 1.0), 1e308, False, False)
+    seq, t, left, right = tp.decode_state(tp.pack_state(3, 1.0, (d, d)))
+    assert left[:3] == (1e308, 1e308, 1e308)
+    nan = tp.DeviceState((0.0, float('nan'), 0.0), (0.0, 0.0, 0.0, 1.0), 0.0, False, False)
+    with pytest.raises(tp.ProtocolError) as e:
+        tp.decode_state(tp.pack_state(3, 1.0, (d, nan)))
+    assert e.value.reason == 'non_finite'
+    inf_t = tp.pack_state(3, float('inf'), (d, d))
+    with pytest.raises(tp.ProtocolError) as e:
+        tp.decode_state(inf_t)
+    assert e.value.reason == 'non_finite' and 'sender_time' in str(e.value)
+
+
+def test_command_layout_against_hand_offsets():
+    cmds = (tp.DeviceCommand((1.0, -2.0, 0.5), (0.25, 0.0, 0.1), True),
+            tp.DeviceCommand((0.0, 3.0, 0.0), (0.0, 0.0, 0.0), False))
+    data = tp.pack_command(0x0A0B0C0D, 7.5, cmds)
+    assert data[0:4] == b'TBAL' and data[4] == 1 and data[5] == 2
+    assert struct.unpack_from('<Id', data, 8) == (0x0A0B0C0D, 7.5)
+    assert struct.unpack_from('<6dI', data, 20) == (1.0, -2.0, 0.5, 0.25, 0.0, 0.1, 1)
+    assert struct.unpack_from('<6dI', data, 72) == (0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0)
+    assert struct.unpack_from('<I', data, 124)[0] == binascii.crc32(data[:124])

@@ -7,16 +7,46 @@
   after a reconnection nothing is replayed. On every (re)connection the client sends ``hold``
   (if ``hold_on_connect``) so the arm stays where it is until a fresh command arrives.
 * Validates every ``state`` event with :mod:`saras_arm_protocol` before handing it on.
+
+Threads and load (why the stock python-socketio client is not used as is): python-engineio 4.3's
+threaded client starts a new thread for every received message, so a 300 Hz ``state`` stream
+costs 300 thread creations per second and its handlers run concurrently, in any order. Here the
+websocket reader thread dispatches every Socket.IO packet itself, in order, and only *stores* a
+``state`` payload in a bounded mailbox (``state_queue`` entries); a single dispatcher thread
+validates the states in order and calls ``on_state``. A short burst is delivered completely; a
+consumer slower than the stream for longer loses the oldest states (counted in ``conflated``)
+instead of queueing them without bound, and the reader keeps draining the socket, so Engine.IO
+pings are answered on time however slow the consumer is (a backlog of states in front of a ping
+used to drop the link on a loaded host).
 """
 
+import collections
 import logging
 import random
 import threading
 import time
 
+import engineio
 import socketio
+from engineio import packet as eio_packet
 
 from saras_drivers import saras_arm_protocol as proto
+
+
+class _InlineEngineIOClient(engineio.Client):
+    """Engine.IO client that dispatches messages in its reader thread (in order, no thread per
+    message). Handlers must not block: they only count, store or hand over."""
+
+    def _receive_packet(self, pkt):
+        if pkt.packet_type == eio_packet.MESSAGE:
+            self._trigger_event('message', pkt.data, run_async=False)
+        else:
+            super(_InlineEngineIOClient, self)._receive_packet(pkt)
+
+
+class _SocketIOClient(socketio.Client):
+    def _engineio_client_class(self):
+        return _InlineEngineIOClient
 
 
 class NotConnected(RuntimeError):
@@ -25,13 +55,18 @@ class NotConnected(RuntimeError):
 
 class SarasArmClient(object):
     """:param url: e.g. ``http://127.0.0.1:5001``; callbacks are called from the client's
-    threads: ``on_state(dict)``, ``on_error(dict)``, ``on_connection(bool)``."""
+    threads: ``on_state(dict)`` from the dispatcher thread (in order; the oldest are dropped when more
+    than ``state_queue`` wait),
+    ``on_error(dict)`` and ``on_connection(bool)`` from the reader/supervisor threads (they must
+    not block)."""
 
     def __init__(self, url, on_state=None, on_error=None, on_connection=None,
                  subscribe_state=False, hold_on_connect=True, backoff_initial=0.2,
-                 backoff_max=5.0, logger=None):
+                 backoff_max=5.0, logger=None, state_queue=30):
         if not 0.0 < backoff_initial <= backoff_max:
             raise ValueError('need 0 < backoff_initial <= backoff_max')
+        if not int(state_queue) >= 1:
+            raise ValueError('state_queue must be >= 1')
         self.url = url
         self.on_state = on_state
         self.on_error = on_error
@@ -42,12 +77,17 @@ class SarasArmClient(object):
         self.backoff_max = float(backoff_max)
         self.log = logger or logging.getLogger('saras_arm_client')
         # built-in reconnection is disabled: one supervisor thread owns (re)connection.
-        self.sio = socketio.Client(reconnection=False, logger=False, engineio_logger=False,
+        self.sio = _SocketIOClient(reconnection=False, logger=False, engineio_logger=False,
                                    handle_sigint=False)
         self.connected = False
         self.connections = 0
-        self.states = 0
+        self.states = 0                # states handed to on_state
+        self.received_states = 0       # state events received
+        self.conflated = 0             # states dropped (mailbox full) before on_state took them
         self.bad_states = 0
+        self._mailbox = collections.deque(maxlen=int(state_queue))   # unprocessed state payloads
+        self._mail = threading.Condition(threading.Lock())
+        self._dispatcher = None
         self.errors = 0
         self.info = None
         self._next_id = 0
@@ -80,15 +120,13 @@ class SarasArmClient(object):
 
         @sio.on(proto.EV_STATE)
         def state(payload):
-            try:
-                s = proto.parse_state(payload)
-            except proto.ProtocolError as e:
-                self.bad_states += 1
-                self.log.error('malformed state event: %s', e)
-                return
-            self.states += 1
-            if self.on_state:
-                self.on_state(s)
+            # reader thread: store and wake the dispatcher, nothing else
+            with self._mail:
+                self.received_states += 1
+                if len(self._mailbox) == self._mailbox.maxlen:
+                    self.conflated += 1          # the oldest one falls out
+                self._mailbox.append(payload)
+                self._mail.notify()
 
         @sio.on(proto.EV_ERROR)
         def error(payload):
@@ -100,16 +138,46 @@ class SarasArmClient(object):
     def start(self):
         self._thread = threading.Thread(target=self._supervise, name='saras_arm_client', daemon=True)
         self._thread.start()
+        if self.subscribe:
+            self._dispatcher = threading.Thread(target=self._dispatch, name='saras_arm_state',
+                                                daemon=True)
+            self._dispatcher.start()
 
     def stop(self):
         self._stop.set()
         self._lost.set()
+        with self._mail:
+            self._mail.notify_all()
         try:
             self.sio.disconnect()
         except Exception:
             pass
         if self._thread is not None:
             self._thread.join(3.0)
+        if self._dispatcher is not None:
+            self._dispatcher.join(3.0)
+
+    def _dispatch(self):
+        """Dispatcher thread: validate the queued states in order and hand them to ``on_state``."""
+        while True:
+            with self._mail:
+                while not self._mailbox and not self._stop.is_set():
+                    self._mail.wait()
+                if self._stop.is_set():
+                    return
+                payload = self._mailbox.popleft()
+            try:
+                s = proto.parse_state(payload)
+            except proto.ProtocolError as e:
+                self.bad_states += 1
+                self.log.error('malformed state event: %s', e)
+                continue
+            self.states += 1
+            if self.on_state:
+                try:
+                    self.on_state(s)
+                except Exception as e:  # pylint: disable=broad-except
+                    self.log.error('state callback failed: %s', e)
 
     def wait_connected(self, timeout):
         end = time.monotonic() + timeout

@@ -188,6 +188,9 @@ class SarasArmModel(object):
         """Advance by dt [s] in sub-steps of at most 1/min_rate. Returns True while moving."""
         if not dt > 0.0:
             return self.moving
+        self.time += dt
+        if not self.moving:            # at the target: nothing to integrate (idle fast path)
+            return False
         n = max(1, int(math.ceil(dt / self.max_step - 1e-9)))
         h = dt / n
         for _ in range(n):
@@ -195,9 +198,8 @@ class SarasArmModel(object):
             scale = np.max(np.abs(err) / (self._speed * h))
             if scale <= 1.0:
                 self.q[:] = self.target
-            else:
-                self.q += err / scale
-        self.time += dt
+                break                  # reached: the remaining sub-steps would not move
+            self.q += err / scale
         return self.moving
 
     @property

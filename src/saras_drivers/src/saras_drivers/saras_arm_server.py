@@ -2,11 +2,19 @@
 
 python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
 
-* a control task integrates :class:`SarasArmModel` at ``rate`` Hz (>= 500 Hz) using the measured
-  elapsed time (so a late wake-up is integrated, not lost), and every ``rate/state_rate`` steps
-  emits a ``state`` event to the clients that subscribed;
+* a control task wakes at ``state_rate`` Hz, integrates :class:`SarasArmModel` to each sample
+  instant of that grid in sub-steps of at most ``1/rate`` s (``rate`` >= 500 Hz, the model's
+  internal integration rate) and emits one ``state`` event per sample to each subscribed client;
+  after a late wake-up it emits the samples it missed (up to ``max_catch_up`` periods), so the
+  stream keeps its rate and exact sample times on a loaded host, delivered in a short burst;
+* every command first integrates the model up to its arrival time, so a command takes effect at
+  the instant it arrived, not at the next tick;
 * event handlers validate payloads with :mod:`saras_arm_protocol` and answer with an ack; a rejected
-  command also gets an ``error`` event and changes nothing;
+  command also gets an ``error`` event and changes nothing. They run as asyncio tasks (FIFO, so in
+  the order sent);
+* back-pressure: a client whose Engine.IO send queue still holds ``max_backlog`` packets (it reads
+  slower than the stream for a while) skips that state sample (counted in ``state_skipped``), so neither the
+  state latency nor the Engine.IO ping behind it grows without bound;
 * when the client that commanded motion disconnects, the arm holds (target := current joints).
 """
 
@@ -27,18 +35,25 @@ class SarasArmServer(object):
     :param state_rate: state stream rate [Hz] (rate must be a multiple)."""
 
     def __init__(self, model, host='127.0.0.1', port=5000, rate=1000.0, state_rate=250.0,
-                 logger=None, ping_interval=1.0, ping_timeout=1.0):
+                 logger=None, ping_interval=1.0, ping_timeout=5.0, max_backlog=32,
+                 max_catch_up=30):
         if not rate >= 500.0:
             raise ValueError('rate must be >= 500 Hz, got %r' % rate)
         if not 0.0 < state_rate <= rate:
             raise ValueError('state_rate must be in (0, rate], got %r' % state_rate)
+        if not max_backlog >= 1:
+            raise ValueError('max_backlog must be >= 1, got %r' % max_backlog)
         self.model = model
+        # integration sub-step: at most 1/rate [s] (the model may already use a finer one)
+        model.max_step = min(model.max_step, 1.0 / float(rate))
         self.host, self.port = host, int(port)
         self.rate = float(rate)
-        self.decimation = max(1, int(round(rate / state_rate)))
+        self.state_rate = float(state_rate)
+        self.max_backlog = int(max_backlog)
+        self.max_catch_up = int(max_catch_up)
         self.log = logger or logging.getLogger('saras_arm_server')
-        # Engine.IO heartbeat: a client that misses pings for ping_interval + ping_timeout [s] is
-        # dropped (and a client detects a dead server in the same time).
+        # Engine.IO heartbeat: a client that does not answer a ping (sent every ping_interval [s])
+        # within ping_timeout [s] is dropped; a client sees a dead server after the same sum.
         self.sio = socketio.AsyncServer(async_mode='aiohttp', logger=False, engineio_logger=False,
                                         ping_interval=ping_interval, ping_timeout=ping_timeout)
         self.app = web.Application()
@@ -51,8 +66,17 @@ class SarasArmServer(object):
         self.sids = set()
         self.events = {}             # accepted commands per event name
         self.max_late = 0.0          # worst control-step lateness [s]
-        self._sample_time = time.time()
+        self.state_skipped = 0       # state samples not sent to a backlogged client
+        self.missed = 0              # grid samples lost to a wake-up later than max_catch_up periods
+        self.subscribers = set()     # sids in the state stream
+        self._period = 1.0 / self.state_rate
+        self._deadline = time.monotonic() + self._period   # next sample instant (monotonic)
+        self._emit_lock = None       # asyncio.Lock, created in the server's loop
+        self._fk_key = None          # joint vector of the cached forward kinematics
+        self._fk = None
         self._wall_offset = time.time() - time.monotonic()
+        self._last_step = time.monotonic()
+        self._sample_time = self._last_step + self._wall_offset
         self.ready = threading.Event()
         self._stop = None
         self._loop = None
@@ -73,7 +97,11 @@ class SarasArmServer(object):
         async def disconnect(sid):
             self.clients -= 1
             self.sids.discard(sid)
+            self.subscribers.discard(sid)
             if sid == self.commander:
+                now = time.monotonic()
+                await self._sample_until(now)
+                self.advance(now)
                 self.model.hold()
                 self.commander = None
                 self.log.warning('commanding client %s disconnected: holding', sid)
@@ -81,7 +109,12 @@ class SarasArmServer(object):
         async def run(sid, event, payload, fn):
             cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
             cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
+            # first the state samples a late loop still owes (so they are not overtaken by the
+            # command), then the command acts now: no await between advance() and fn()
+            now = time.monotonic()
+            await self._sample_until(now)
             try:
+                self.advance(now)           # (a no-op if the loop already sampled past now)
                 extra = fn(payload)
             except proto.ProtocolError as e:
                 self.rejected += 1
@@ -129,6 +162,7 @@ class SarasArmServer(object):
         @sio.on(proto.EV_SUBSCRIBE_STATE)
         async def subscribe_state(sid, payload=None):
             self.sio.enter_room(sid, proto.STATE_ROOM)
+            self.subscribers.add(sid)
             r = proto.reply(True)
             r['info'] = self.info()
             return r
@@ -138,40 +172,77 @@ class SarasArmServer(object):
         return {'version': proto.VERSION, 'joints': list(proto.MOTOR_JOINTS),
                 'lower': [float(x) for x in m.lower], 'upper': [float(x) for x in m.upper],
                 'insertion_ratio': m.insertion_ratio, 'max_velocity_limit': m.max_velocity_limit,
-                'rate': self.rate, 'state_rate': self.rate / self.decimation}
+                'rate': self.rate, 'state_rate': self.state_rate}
 
     def state(self):
         m = self.model
-        t = m.tip_in_base()
+        key = m.q.tobytes()
+        if key != self._fk_key:        # forward kinematics only when the joints changed
+            t = m.tip_in_base()
+            self._fk = (t[:3, 3].copy(), matrix_to_quat(t[:3, :3]), m.rcm_position())
+            self._fk_key = key
         self.state_seq += 1
-        return proto.make_state(self.state_seq, self._sample_time, m.q, t[:3, 3], matrix_to_quat(t[:3, :3]),
-                                m.rcm_position(), m.moving, m.max_velocity, m.target_id)
+        return proto.make_state(self.state_seq, self._sample_time, m.q, self._fk[0], self._fk[1],
+                                self._fk[2], m.moving, m.max_velocity, m.target_id)
 
     # ------------------------------------------------------------------ loop
+    def advance(self, until=None):
+        """Integrate the model up to ``until`` (monotonic time, default now) in sub-steps of at
+        most 1/rate; a time in the model's past changes nothing."""
+        t = time.monotonic() if until is None else until
+        if t > self._last_step:
+            self.model.step(t - self._last_step)
+            self._last_step = t
+            # wall-clock instant of this model state, on the same time base as the integration
+            self._sample_time = t + self._wall_offset
+
+    def _backlogged(self, sid):
+        """True when the client's Engine.IO queue still holds max_backlog packets."""
+        try:
+            eio_sid = self.sio.manager.eio_sid_from_sid(sid, proto.NAMESPACE)
+            sock = self.sio.eio.sockets.get(eio_sid)
+        except Exception:  # pylint: disable=broad-except
+            return False
+        return sock is not None and sock.queue.qsize() >= self.max_backlog
+
+    async def _sample_until(self, now):
+        """Emit every sample of the ``state_rate`` grid up to ``now``, each integrated to its own
+        instant and stamped with it. After a late wake-up (loaded host) the missed samples go out
+        in a burst, as a robot controller on its own CPU would have sampled them; beyond
+        ``max_catch_up`` periods the grid is re-anchored (those samples are lost, counted in
+        ``missed``). Called by the control loop and before every command, so a command never
+        overtakes samples owed before it and sample times always increase."""
+        async with self._emit_lock:
+            period = self._period
+            if now - self._deadline > self.max_catch_up * period:
+                lost = int((now - self._deadline) / period)
+                self.missed += lost
+                self._deadline += lost * period
+            while self._deadline <= now:
+                self.advance(self._deadline)
+                if self.subscribers:
+                    state = self.state()
+                    for sid in list(self.subscribers):
+                        if self._backlogged(sid):
+                            self.state_skipped += 1
+                            continue
+                        await self.sio.emit(proto.EV_STATE, state, to=sid)
+                self._deadline += period
+
     async def _control(self):
-        period = 1.0 / self.rate
-        last = time.monotonic()
-        deadline = last + period
-        k = 0
+        """Wake at the state rate and emit the samples that are due."""
+        self._deadline = time.monotonic() + self._period
         while not self._stop.is_set():
-            delay = deadline - time.monotonic()
+            delay = self._deadline - time.monotonic()
             if delay > 0:
                 await asyncio.sleep(delay)
             now = time.monotonic()
-            # wall-clock instant of this model state, on the same time base as the integration
-            self._sample_time = now + self._wall_offset
-            self.max_late = max(self.max_late, now - deadline)
-            self.model.step(now - last)
-            last = now
-            k += 1
-            if k % self.decimation == 0:
-                await self.sio.emit(proto.EV_STATE, self.state(), room=proto.STATE_ROOM)
-            deadline += period
-            if now - deadline > 10 * period:      # overloaded: re-anchor instead of bursting
-                deadline = now + period
+            self.max_late = max(self.max_late, now - self._deadline)
+            await self._sample_until(now)
 
     async def serve(self):
         self._stop = asyncio.Event()
+        self._emit_lock = asyncio.Lock()
         runner = web.AppRunner(self.app)
         await runner.setup()
         site = web.TCPSite(runner, self.host, self.port)

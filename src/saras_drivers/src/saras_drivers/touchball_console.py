@@ -84,10 +84,11 @@ class ScriptedMotion(object):
         self.clutch_period = float(clutch_period)
         self.clutch_duration = float(clutch_duration)
         self.phase = float(phase)
+        self._w = tuple(2.0 * math.pi * f for f in self.frequency)     # [rad/s]
 
     def __call__(self, t):
         t = t + self.phase
-        w = [2.0 * math.pi * f for f in self.frequency]
+        w = self._w
         pos = (self.home[0] + self.amplitude[0] * math.sin(w[0] * t),
                self.home[1] + self.amplitude[1] * math.sin(w[1] * t + math.pi / 2),
                self.home[2] + self.amplitude[2] * math.sin(w[2] * t))
@@ -220,12 +221,15 @@ class HandDeviceModel(object):
             self.reset(target)
         n = max(1, int(math.ceil(dt / self.max_step)))
         h = dt / n
-        for _ in range(n):
-            for i in range(3):
-                a = (self.k * (target[i] - self.x[i]) - (self.bh + self.b) * self.v[i] + force[i]) / self.m
-                self.v[i] += h * a
-                self.x[i] += h * self.v[i]
-        return tuple(self.x)
+        k, c, m = self.k, self.bh + self.b, self.m
+        x, v = self.x, self.v
+        for i in range(3):                      # semi-implicit Euler, axes are independent
+            xi, vi, ti, fi = x[i], v[i], target[i], force[i]
+            for _ in range(n):
+                vi += h * ((k * (ti - xi) - c * vi + fi) / m)
+                xi += h * vi
+            x[i], v[i] = xi, vi
+        return tuple(x)
 
 
 class ConsoleCalibration(object):

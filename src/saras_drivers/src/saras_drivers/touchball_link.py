@@ -61,26 +61,45 @@ class TwistEstimator(object):
         self.reset()
 
     def reset(self):
-        self._p = None
-        self._q = None
         self._t = None
+        self._p = self._q = None
         self.linear = (0.0, 0.0, 0.0)
         self.angular = (0.0, 0.0, 0.0)
 
     def update(self, t, position, orientation):
         """Feed a sample at sender time t [s]; returns (linear, angular)."""
+        return self.update_flat(t, position[0], position[1], position[2], orientation[0],
+                                orientation[1], orientation[2], orientation[3])
+
+    def update_flat(self, t, px, py, pz, qx, qy, qz, qw):
+        """:meth:`update` with scalar arguments (the receiver's hot path, no temporaries)."""
         if self._t is not None:
             dt = t - self._t
             if dt <= 0.0 or dt > self.max_dt:
                 self.reset()
             else:
-                v = tuple((position[i] - self._p[i]) / dt for i in range(3))
-                r = quat_log_vec(quat_mul(orientation, quat_conj(self._q)))
-                w = tuple(c / dt for c in r)
+                ox, oy, oz = self._p
+                ax, ay, az, aw = self._q
+                # r = q * conj(q_prev): rotation from the previous to this orientation (base frame)
+                rx = -qw * ax + qx * aw - qy * az + qz * ay
+                ry = -qw * ay + qx * az + qy * aw - qz * ax
+                rz = -qw * az - qx * ay + qy * ax + qz * aw
+                rw = qw * aw + qx * ax + qy * ay + qz * az
+                if rw < 0.0:
+                    rx, ry, rz, rw = -rx, -ry, -rz, -rw
+                s = math.sqrt(rx * rx + ry * ry + rz * rz)
+                k = 2.0 if s < 1e-12 else 2.0 * math.atan2(s, rw) / s   # log: axis * angle
                 a = dt / (dt + self.tau)
-                self.linear = tuple(l + a * (n - l) for l, n in zip(self.linear, v))
-                self.angular = tuple(l + a * (n - l) for l, n in zip(self.angular, w))
-        self._p, self._q, self._t = tuple(position), tuple(orientation), t
+                b = a / dt
+                lx, ly, lz = self.linear
+                wx, wy, wz = self.angular
+                self.linear = (lx + b * (px - ox) - a * lx,
+                               ly + b * (py - oy) - a * ly, lz + b * (pz - oz) - a * lz)
+                k *= b
+                self.angular = (wx + k * rx - a * wx, wy + k * ry - a * wy, wz + k * rz - a * wz)
+        self._p = (px, py, pz)
+        self._q = (qx, qy, qz, qw)
+        self._t = t
         return self.linear, self.angular
 
 
@@ -109,8 +128,12 @@ class TouchballLink(object):
         self.rejected = dict((r, 0) for r in tp.REJECT_REASONS)
         self.received = 0
         self.last_valid = None          # receive time of the last accepted packet
-        self.last_packet = None
         self.last_error = ''
+        # the last accepted packet, as decoded by touchball_protocol.decode_state
+        self.seq = 0
+        self.sender_time = None
+        self.devices = None             # (left, right) flat (x, y, z, qx, qy, qz, qw, clip, buttons)
+        self.gap = 0
 
     @property
     def rejected_total(self):
@@ -120,38 +143,64 @@ class TouchballLink(object):
     def gaps(self):
         return self.sequence.gaps
 
+    @property
+    def last_packet(self):
+        """The last accepted packet as a :class:`touchball_protocol.StatePacket` (None if none)."""
+        if self.devices is None:
+            return None
+        return tp.StatePacket(self.seq, self.sender_time, tuple(tp.device_state(d) for d in self.devices))
+
+    def twists(self):
+        """Per device ((vx, vy, vz) [m/s], (wx, wy, wz) [rad/s]) of the last accepted packet."""
+        return tuple((est.linear, est.angular) for est in self.twist)
+
+    def accept(self, data, source_ip, now):
+        """Validate one datagram received from ``source_ip`` at ``now`` [s] (hot path).
+
+        Returns True when accepted: ``seq``, ``sender_time``, ``devices``, ``gap`` and each
+        ``twist[i].linear/angular`` then describe it. Returns False otherwise: the rejection is
+        counted in ``rejected[reason]`` and described in ``last_error``. Never raises on bad input.
+        """
+        try:
+            if self.allowed_source and source_ip != self.allowed_source:
+                raise tp.ProtocolError('foreign_source', str(source_ip))
+            seq, sender_time, left, right = tp.decode_state(data)
+            if self.last_valid is not None and now - self.last_valid > self.resync_after:
+                # The console may have restarted (sequence back to 0): accept a new sequence,
+                # but only with a newer sender timestamp, so an old packet replayed after a
+                # silence is still refused.
+                if sender_time <= self.sender_time:
+                    raise tp.ProtocolError('out_of_order', 'sender_time %.6f not newer than %.6f '
+                                           'after resync' % (sender_time, self.sender_time))
+                self.sequence.reset()
+                for est in self.twist:
+                    est.reset()
+            self.gap = self.sequence.accept(seq)
+        except tp.ProtocolError as e:
+            self.rejected[e.reason] += 1
+            self.last_error = str(e)
+            return False
+        except (TypeError, ValueError) as e:     # not a bytes-like object: counted as a size error
+            self.rejected['size'] += 1
+            self.last_error = 'size: %s' % e
+            return False
+        self.twist[0].update_flat(sender_time, *left[:7])
+        self.twist[1].update_flat(sender_time, *right[:7])
+        self.received += 1
+        self.last_valid = now
+        self.seq, self.sender_time, self.devices = seq, sender_time, (left, right)
+        return True
+
     def handle_datagram(self, data, source_ip, now):
         """Validate one datagram received from ``source_ip`` at ``now`` [s].
 
         Returns a :class:`LinkSample` when accepted, else None (the rejection is counted in
         ``rejected[reason]`` and described in ``last_error``). Never raises on bad input.
+        Convenience wrapper of :meth:`accept` (which the receiver uses, without the tuples).
         """
-        try:
-            if self.allowed_source and source_ip != self.allowed_source:
-                raise tp.ProtocolError('foreign_source', str(source_ip))
-            pkt = tp.unpack_state(bytes(data))
-            if self.last_valid is not None and now - self.last_valid > self.resync_after:
-                # The console may have restarted (sequence back to 0): accept a new sequence,
-                # but only with a newer sender timestamp, so an old packet replayed after a
-                # silence is still refused.
-                if pkt.sender_time <= self.last_packet.sender_time:
-                    raise tp.ProtocolError('out_of_order', 'sender_time %.6f not newer than %.6f '
-                                           'after resync' % (pkt.sender_time,
-                                                             self.last_packet.sender_time))
-                self.sequence.reset()
-                for est in self.twist:
-                    est.reset()
-            gap = self.sequence.accept(pkt.seq)
-        except tp.ProtocolError as e:
-            self.rejected[e.reason] += 1
-            self.last_error = str(e)
+        if not self.accept(data, source_ip, now):
             return None
-        twists = tuple(est.update(pkt.sender_time, d.position, d.orientation)
-                       for est, d in zip(self.twist, pkt.devices))
-        self.received += 1
-        self.last_valid = now
-        self.last_packet = pkt
-        return LinkSample(pkt, twists, gap)
+        return LinkSample(self.last_packet, self.twists(), self.gap)
 
     def input_age(self, now):
         """Seconds since the last valid packet (inf if none yet)."""

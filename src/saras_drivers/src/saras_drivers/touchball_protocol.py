@@ -48,6 +48,12 @@ CRC = struct.Struct('<I')
 STATE_SIZE = HEADER.size + 2 * STATE_DEVICE.size + CRC.size
 COMMAND_SIZE = HEADER.size + 2 * COMMAND_DEVICE.size + CRC.size
 
+# Whole-packet layouts (everything before the CRC) for the single-call hot paths.
+_STATE_BODY = struct.Struct('<4sBBHId3d4ddI3d4ddI')
+_COMMAND_BODY = struct.Struct('<4sBBHId3d3dI3d3dI')
+_STATE_PREFIX = MAGIC + bytes((VERSION, TYPE_STATE))
+assert _STATE_BODY.size + CRC.size == STATE_SIZE and _COMMAND_BODY.size + CRC.size == COMMAND_SIZE
+
 #: Accepted deviation of the quaternion norm from 1 before a packet is rejected.
 QUATERNION_NORM_TOLERANCE = 1e-3
 
@@ -86,27 +92,26 @@ def _finish(body):
 
 def pack_state(seq, sender_time, devices):
     """Encode a state packet. ``devices`` = (left, right) :class:`DeviceState`. Returns bytes."""
-    parts = [HEADER.pack(MAGIC, VERSION, TYPE_STATE, 0, seq & 0xFFFFFFFF, float(sender_time))]
-    for d in devices:
-        buttons = (BUTTON_CLUTCH if d.clutch else 0) | (BUTTON_CLIP if d.clip_button else 0)
-        parts.append(STATE_DEVICE.pack(d.position[0], d.position[1], d.position[2],
-                                       d.orientation[0], d.orientation[1], d.orientation[2],
-                                       d.orientation[3], d.clip_angle, buttons))
-    if len(parts) != 3:
+    if len(devices) != 2:
         raise ValueError('a state packet carries exactly two devices')
-    return _finish(b''.join(parts))
+    (lp, lq, lc, lcl, lcb), (rp, rq, rc, rcl, rcb) = devices
+    body = _STATE_BODY.pack(MAGIC, VERSION, TYPE_STATE, 0, seq & 0xFFFFFFFF, float(sender_time),
+                            lp[0], lp[1], lp[2], lq[0], lq[1], lq[2], lq[3], lc,
+                            (BUTTON_CLUTCH if lcl else 0) | (BUTTON_CLIP if lcb else 0),
+                            rp[0], rp[1], rp[2], rq[0], rq[1], rq[2], rq[3], rc,
+                            (BUTTON_CLUTCH if rcl else 0) | (BUTTON_CLIP if rcb else 0))
+    return body + CRC.pack(zlib.crc32(body) & 0xFFFFFFFF)
 
 
 def pack_command(seq, sender_time, commands):
     """Encode a command packet. ``commands`` = (left, right) :class:`DeviceCommand`."""
-    parts = [HEADER.pack(MAGIC, VERSION, TYPE_COMMAND, 0, seq & 0xFFFFFFFF, float(sender_time))]
-    for c in commands:
-        parts.append(COMMAND_DEVICE.pack(c.force[0], c.force[1], c.force[2],
-                                         c.torque[0], c.torque[1], c.torque[2],
-                                         CMD_ENABLED if c.enabled else 0))
-    if len(parts) != 3:
+    if len(commands) != 2:
         raise ValueError('a command packet carries exactly two devices')
-    return _finish(b''.join(parts))
+    (lf, lt, le), (rf, rt, re) = commands
+    body = _COMMAND_BODY.pack(MAGIC, VERSION, TYPE_COMMAND, 0, seq & 0xFFFFFFFF, float(sender_time),
+                              lf[0], lf[1], lf[2], lt[0], lt[1], lt[2], CMD_ENABLED if le else 0,
+                              rf[0], rf[1], rf[2], rt[0], rt[1], rt[2], CMD_ENABLED if re else 0)
+    return body + CRC.pack(zlib.crc32(body) & 0xFFFFFFFF)
 
 
 def _check_frame(data, size, ptype):
@@ -128,41 +133,70 @@ def _check_frame(data, size, ptype):
     return seq, sender_time
 
 
+def decode_state(data):
+    """Decode and validate a state packet with one ``struct`` call (the receiver's hot path).
+
+    Returns ``(seq, sender_time, left, right)`` where each device is the flat tuple
+    ``(x, y, z, qx, qy, qz, qw, clip_angle, buttons)`` [m, unit quaternion, rad, bit mask] with the
+    quaternion re-normalised. Raises :class:`ProtocolError`; checks in this order, the first
+    failing one is the reason: size, magic, version, type, crc, non_finite (any field, sender
+    time first), quaternion (left, then right). The defective cases fall back to field-by-field
+    checks, so the fast path costs one unpack, one CRC and two sums.
+    """
+    if (len(data) != STATE_SIZE or data[:6] != _STATE_PREFIX
+            or CRC.unpack_from(data, STATE_SIZE - CRC.size)[0]
+            != zlib.crc32(memoryview(data)[:STATE_SIZE - CRC.size])):
+        _check_frame(data, STATE_SIZE, TYPE_STATE)      # raises the precise reason
+    v = _STATE_BODY.unpack_from(data)
+    # v: magic, version, type, flags, seq, sender_time, left (8 floats, buttons), right (...)
+    if not math.isfinite(v[5] + sum(v[6:14]) + sum(v[15:23])):
+        _check_finite(v)                                # raises (or a finite overflow: passes)
+    out = [v[4], v[5]]
+    for o in (6, 15):
+        qx, qy, qz, qw = v[o + 3], v[o + 4], v[o + 5], v[o + 6]
+        n = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+        if abs(n - 1.0) > QUATERNION_NORM_TOLERANCE:
+            raise ProtocolError('quaternion', 'norm %g' % n)
+        out.append((v[o], v[o + 1], v[o + 2], qx / n, qy / n, qz / n, qw / n, v[o + 7], v[o + 8]))
+    return tuple(out)
+
+
+def _check_finite(v):
+    """Field-by-field finiteness check of an unpacked state body, in wire order."""
+    if not math.isfinite(v[5]):
+        raise ProtocolError('non_finite', 'sender_time')
+    for o in (6, 15):
+        if not all(math.isfinite(x) for x in v[o:o + 8]):
+            raise ProtocolError('non_finite', 'device field')
+
+
+def device_state(flat):
+    """:class:`DeviceState` of one flat device tuple returned by :func:`decode_state`."""
+    return DeviceState(flat[0:3], flat[3:7], flat[7], bool(flat[8] & BUTTON_CLUTCH),
+                       bool(flat[8] & BUTTON_CLIP))
+
+
 def unpack_state(data):
     """Decode and validate a state packet; raises :class:`ProtocolError` on any defect.
 
     The quaternion must have a norm within :data:`QUATERNION_NORM_TOLERANCE` of 1; it is
     returned re-normalised.
     """
-    seq, sender_time = _check_frame(data, STATE_SIZE, TYPE_STATE)
-    devices = []
-    off = HEADER.size
-    for _ in DEVICES:
-        v = STATE_DEVICE.unpack_from(data, off)
-        off += STATE_DEVICE.size
-        if not all(math.isfinite(x) for x in v[:8]):
-            raise ProtocolError('non_finite', 'device field')
-        q = v[3:7]
-        n = math.sqrt(sum(x * x for x in q))
-        if abs(n - 1.0) > QUATERNION_NORM_TOLERANCE:
-            raise ProtocolError('quaternion', 'norm %g' % n)
-        devices.append(DeviceState(v[0:3], tuple(x / n for x in q), v[7],
-                                   bool(v[8] & BUTTON_CLUTCH), bool(v[8] & BUTTON_CLIP)))
-    return StatePacket(seq, sender_time, tuple(devices))
+    seq, sender_time, left, right = decode_state(data)
+    return StatePacket(seq, sender_time, (device_state(left), device_state(right)))
 
 
 def unpack_command(data):
     """Decode and validate a command packet; raises :class:`ProtocolError` on any defect."""
     seq, sender_time = _check_frame(data, COMMAND_SIZE, TYPE_COMMAND)
-    cmds = []
-    off = HEADER.size
-    for _ in DEVICES:
-        v = COMMAND_DEVICE.unpack_from(data, off)
-        off += COMMAND_DEVICE.size
-        if not all(math.isfinite(x) for x in v[:6]):
-            raise ProtocolError('non_finite', 'command field')
-        cmds.append(DeviceCommand(v[0:3], v[3:6], bool(v[6] & CMD_ENABLED)))
-    return CommandPacket(seq, sender_time, tuple(cmds))
+    v = _COMMAND_BODY.unpack_from(data)
+    # v: header (6), left force (3), torque (3), flags, right force, torque, flags
+    if not math.isfinite(sum(v[6:12]) + sum(v[13:19])):
+        for o in (6, 13):                       # exact check (a finite sum may overflow)
+            if not all(math.isfinite(x) for x in v[o:o + 6]):
+                raise ProtocolError('non_finite', 'command field')
+    return CommandPacket(seq, sender_time, (DeviceCommand(v[6:9], v[9:12], bool(v[12] & CMD_ENABLED)),
+                                            DeviceCommand(v[13:16], v[16:19], bool(v[19] & CMD_ENABLED))))
 
 
 class SequenceTracker(object):

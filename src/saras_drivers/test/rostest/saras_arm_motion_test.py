@@ -11,8 +11,10 @@ import unittest
 import numpy as np
 import rospy
 import rostest
+import tf2_ros
 from geometry_msgs.msg import PointStamped, PoseStamped
 from sensor_msgs.msg import JointState
+from tf2_msgs.msg import TFMessage
 
 from saras_drivers.saras_arm_model import quat_to_matrix
 from saras_msgs.msg import ComponentStatus
@@ -37,6 +39,10 @@ class TestMotion(unittest.TestCase):
         rospy.Subscriber(NS + 'joint_states', JointState, cls.on_js, queue_size=1000, tcp_nodelay=True)
         rospy.Subscriber(NS + 'rcm_position', PointStamped, cls.on_rcm, queue_size=10)
         rospy.Subscriber('/saras/status', ComponentStatus, cls.status.append, queue_size=100)
+        cls.tf_stamps = set()
+        rospy.Subscriber('/tf', TFMessage, cls.on_tf, queue_size=1000, tcp_nodelay=True)
+        cls.tf_buffer = tf2_ros.Buffer()
+        cls.tf_listener = tf2_ros.TransformListener(cls.tf_buffer)
         cls.pub = rospy.Publisher(NS + 'target_pose', PoseStamped, queue_size=10)
         rospy.wait_for_service(NS + 'set_max_velocity', 30.0)
         cls.set_vel = rospy.ServiceProxy(NS + 'set_max_velocity', SetMaxVelocity)
@@ -49,6 +55,13 @@ class TestMotion(unittest.TestCase):
     def on_pose(cls, m):
         with cls.lock:
             cls.poses.append((time.monotonic(), m))
+
+    @classmethod
+    def on_tf(cls, m):
+        for t in m.transforms:
+            if t.child_frame_id == 'mesa_left/er_yaw_link':
+                with cls.lock:
+                    cls.tf_stamps.add(t.header.stamp.to_sec())
 
     @classmethod
     def on_js(cls, m):
@@ -91,17 +104,42 @@ class TestMotion(unittest.TestCase):
         # stamps = the simulator's state times (use_robot_time with sim:=true): the rate at which
         # the arm's state is published, independent of this test node's own receive jitter
         self.assertIsNotNone(self.rcm)
+        # (not hztest: its receive-time rate measures this test node's own scheduling, 184 Hz
+        # at load 20 while every sample was published and received)
         with self.lock:
-            n0, t0 = len(self.joints), time.monotonic()
+            n0, p0 = len(self.joints), len(self.poses)
         time.sleep(2.0)
         with self.lock:
             stamps = [m.header.stamp.to_sec() for m in self.joints[n0:]]
-        rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
-        rospy.loginfo('joint_states rate %.1f Hz' % rate)
-        self.assertGreaterEqual(rate, 250.0)
+            pose_stamps = [m.header.stamp.to_sec() for _, m in self.poses[p0:]]
+        for name, st in (('joint_states', stamps), ('ee_pose', pose_stamps)):
+            rate = (len(st) - 1) / (st[-1] - st[0])
+            rospy.loginfo('%s rate %.1f Hz' % (name, rate))
+            self.assertGreaterEqual(rate, 250.0, name)
+            self.assertTrue(all(b > a for a, b in zip(st, st[1:])), name + ' stamps not increasing')
         self.assertEqual(self.poses[-1][1].header.frame_id, FRAME)
         self.assertEqual(len(self.joints[-1].name), 13)
         self.assertTrue(all(n.startswith('mesa_left/') for n in self.joints[-1].name))
+
+    def test_1b_tf_at_state_rate_equals_ee_pose(self):
+        # ~publish_tf: one TFMessage per state sample (stamps = sample times); the URDF chain
+        # sbs_world -> tool_tip at an ee_pose stamp equals that ee_pose
+        with self.lock:
+            self.tf_stamps.clear()
+        time.sleep(2.0)
+        with self.lock:
+            stamps = sorted(self.tf_stamps)
+        rate = (len(stamps) - 1) / (stamps[-1] - stamps[0])
+        rospy.loginfo('TF (mesa_left/er_yaw_link) rate %.1f Hz' % rate)
+        self.assertGreaterEqual(rate, 250.0)
+        with self.lock:
+            m = self.poses[-1][1]
+        t = self.tf_buffer.lookup_transform(FRAME, 'mesa_left/tool_tip', m.header.stamp,
+                                            rospy.Duration(1.0))
+        tr, p = t.transform.translation, m.pose.position
+        np.testing.assert_allclose([tr.x, tr.y, tr.z], [p.x, p.y, p.z], atol=1e-6)
+        r, o = t.transform.rotation, m.pose.orientation
+        self.assertGreater(abs(r.x * o.x + r.y * o.y + r.z * o.z + r.w * o.w), 1.0 - 1e-9)
 
     def test_2_target_reached_through_rcm(self):
         goal = self.target_from_current(0.2, 0.14)

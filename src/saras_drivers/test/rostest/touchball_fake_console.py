@@ -28,6 +28,7 @@ class FakeConsole(object):
         self.seq = 0
         self.epoch = time.time()       # sender_time = wall clock, as the real controller sends
         self.sent = {}
+        self.send_wall = []            # wall time just before each sendto [s]
         self.commands = []
         self._stop = threading.Event()
         self._rx_thread = threading.Thread(target=self._receive, daemon=True)
@@ -51,6 +52,7 @@ class FakeConsole(object):
         data = tp.pack_state(self.seq, self.epoch + t, devs)
         self.sent[self.seq] = devs
         self.seq += 1
+        self.send_wall.append(time.time())
         self.tx.sendto(data, self.dest)
         return data
 

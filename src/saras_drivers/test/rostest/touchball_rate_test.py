@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
-"""rostest: console packets in => every touchball topic published once per packet, at 1 kHz for
-a 1 kHz stream, with the values sent; the TF stylus frame broadcast; each packet answered with a
-command packet carrying the published wrench_cmd.
+"""rostest: a 1 kHz console stream in => EVERY control topic published once per packet at 1 kHz
+(the 8 touchball/<side>/{state,pose,twist,buttons} topics and /tf, both sides in one TFMessage),
+with the values sent; the decimated rviz topic touch_<side>/joint_states at ~joint_states_rate;
+each packet answered with a command packet carrying the published wrench_cmd.
 
-Two phases, because a Python test node cannot itself consume 9 topics x 1 kHz on a 2-core host
-without starving (and, through TCP back-pressure, throttling) the receiver under test:
-1. 200 Hz for 1 s, all 9 streams subscribed (rospy.AnyMsg): exactly one message per packet.
-2. 1 kHz for 3 s, left/state (typed) and right/pose subscribed: publish rate from the header
-   stamps (independent of this node's own receive lag), one message per packet, values.
+Rates come from the header stamps (the receiver's receive time of each packet), counted per
+topic from the raw serialised messages (rospy.AnyMsg, no deserialisation): this test node may
+lag behind 9 x 1 kHz on a loaded 2-core host, but it drains its sockets afterwards, so the
+counts and stamps it checks are the receiver's, not its own. Tolerances: every topic carries
+exactly one message per accepted packet; rate = 1 kHz +- 5 %; joint_states: median interval =
+1 / joint_states_rate +- 10 %, mean rate <= 1.05 x and >= 0.6 x the parameter (a rospy timer
+on a loaded host skips ticks, it never adds any).
 """
+import struct
 import sys
 import threading
 import time
@@ -24,21 +28,36 @@ from touchball_fake_console import FakeConsole
 
 RATE = 1000.0
 DURATION = 3.0
-ALL = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
-       for t in ('pose', 'state', 'twist', 'buttons')] + ['/tf']
+CONTROL = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
+           for t in ('pose', 'state', 'twist', 'buttons')] + ['/tf']
+DECIMATED = ['/touch_left/joint_states', '/touch_right/joint_states']
+STAMP = struct.Struct('<II')
 
 
-class Counter(object):
-    def __init__(self):
-        self.n = 0
+class StampRecorder(object):
+    """Header stamps [s] of a topic from the raw message (Header first: stamp at byte 4; TFMessage: 8)."""
+
+    def __init__(self, offset, is_state=False):
+        self.offset = offset
+        self.is_state = is_state
+        self.stamps = []
+        self.stale = 0                  # HapticDeviceState with stale=true (its last byte)
         self.lock = threading.Lock()
 
-    def __call__(self, _msg):
+    def __call__(self, msg):
+        if isinstance(msg, rospy.AnyMsg):
+            secs, nsecs = STAMP.unpack_from(msg._buff, self.offset)
+            t, stale = secs + 1e-9 * nsecs, self.is_state and msg._buff[-1] == 1
+        else:       # rospy shares one connection per topic: left/state also has a typed subscriber
+            t, stale = msg.header.stamp.to_sec(), msg.stale
         with self.lock:
-            self.n += 1
+            if stale:
+                self.stale += 1
+            else:
+                self.stamps.append(t)
 
 
-def settle(values, timeout=15.0):
+def settle(values, timeout=20.0):
     """Wait until the callable's value stops changing (this node may lag on a loaded host)."""
     end = time.monotonic() + timeout
     prev = None
@@ -59,29 +78,15 @@ class TestRate(unittest.TestCase):
         self.status_sub = rospy.Subscriber('/touchball/status', ComponentStatus, self.status.append,
                                            queue_size=100)
 
-    def test_1_every_topic_once_per_packet(self):
-        counters = dict((t, Counter()) for t in ALL)
-        subs = [rospy.Subscriber(t, rospy.AnyMsg, c, queue_size=10000, tcp_nodelay=True)
-                for t, c in counters.items()]
-        console = FakeConsole(self.port, self.cmd_port)
-        time.sleep(1.5)
-        console.stream(200.0, 1.0)
-        counts = settle(lambda: (self.status[-1].received, tuple(c.n for c in counters.values())))
-        accepted = counts[0]
-        self.assertGreaterEqual(accepted, 0.99 * console.seq)
-        for t, c in counters.items():
-            # + one stale=true state per side when the watchdog fires after the stream
-            self.assertEqual(c.n, accepted + (1 if t.endswith('state') else 0), t)
-        for s in subs:
-            s.unregister()
-        console.close()
-
-    def test_2_1khz_in_1khz_out(self):
+    def test_1khz_in_1khz_out_on_every_topic(self):
         states = []
         rospy.Subscriber('/touchball/left/state', HapticDeviceState, states.append, queue_size=10000,
                          tcp_nodelay=True)
-        poses = Counter()
-        rospy.Subscriber('/touchball/right/pose', rospy.AnyMsg, poses, queue_size=10000, tcp_nodelay=True)
+        rec = dict((t, StampRecorder(8 if t == '/tf' else 4, t.endswith('state')))
+                   for t in CONTROL + DECIMATED)
+        for t, r in rec.items():
+            rospy.Subscriber(t, rospy.AnyMsg, r, queue_size=10000, tcp_nodelay=True)
+        js_rate = rospy.get_param('~joint_states_rate')
         wrench_pub = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=1)
         console = FakeConsole(self.port, self.cmd_port)
         time.sleep(1.5)
@@ -98,21 +103,45 @@ class TestRate(unittest.TestCase):
         send_rate = (console.seq - sent_before) / (t_last - t0)
         rospy.loginfo('send rate %.1f Hz' % send_rate)
         self.assertGreater(send_rate, 0.95 * RATE)
-        settle(lambda: (self.status[-1].received, len(states), poses.n))
+        settle(lambda: (self.status[-1].received, len(states),
+                        tuple(len(r.stamps) for r in rec.values())))
         accepted = self.status[-1].received - received0
         self.assertEqual(self.status[-1].rejected, 0)
         self.assertGreaterEqual(accepted, 0.99 * console.seq)   # UDP may drop a few when loaded
-        self.assertEqual(poses.n, accepted)
         fresh = [m for m in states if not m.stale]
         self.assertEqual(len(fresh), accepted)
         self.assertTrue(states[-1].stale)                  # watchdog after the stream stopped
-        stamps = [m.header.stamp.to_sec() for m in fresh if m.sender_time >= console.epoch + 10.0]
-        r = (len(stamps) - 1) / (stamps[-1] - stamps[0])
-        gaps = sorted(b - a for a, b in zip(stamps, stamps[1:]))
-        rospy.loginfo('publish rate %.1f Hz, interval p50 %.2f ms p99 %.2f ms max %.2f ms'
-                      % (r, 1e3 * gaps[len(gaps) // 2], 1e3 * gaps[int(0.99 * len(gaps))], 1e3 * gaps[-1]))
-        self.assertGreater(r, 0.95 * RATE)
-        self.assertLess(r, 1.05 * RATE)
+        # the measured window: the 1 kHz stream (sender time >= epoch + 10 s)
+        t_first = min(m.header.stamp.to_sec() for m in fresh if m.sender_time >= console.epoch + 10.0)
+        t_last = fresh[-1].header.stamp.to_sec()
+        report = []
+        for topic in CONTROL:
+            st = rec[topic].stamps
+            # one message per accepted packet (+ stale=true states on the state topics, counted apart)
+            self.assertEqual(len(st), accepted, topic)
+            if topic.endswith('state'):
+                self.assertGreaterEqual(rec[topic].stale, 1, topic)
+            win = [x for x in st if t_first <= x <= t_last]
+            self.assertGreater(len(win), 0.9 * DURATION * RATE, topic)
+            r = (len(win) - 1) / (win[-1] - win[0])
+            gaps = sorted(b - a for a, b in zip(win, win[1:]))
+            report.append('%s %.1f Hz (interval p50 %.2f p99 %.2f max %.2f ms)'
+                          % (topic, r, 1e3 * gaps[len(gaps) // 2], 1e3 * gaps[int(0.99 * len(gaps))],
+                             1e3 * gaps[-1]))
+            self.assertGreater(r, 0.95 * RATE, topic)
+            self.assertLess(r, 1.05 * RATE, topic)
+        for topic in DECIMATED:
+            win = [x for x in rec[topic].stamps if t_first <= x <= t_last]
+            r = len(win) / (t_last - t_first)      # one message per timer period with a new packet
+            gaps = sorted(b - a for a, b in zip(win, win[1:]))
+            period = gaps[len(gaps) // 2]
+            report.append('%s %.1f Hz (median interval %.2f ms)' % (topic, r, 1e3 * period))
+            # the median interval is the timer period (robust to stalls of the loaded host), the
+            # mean rate never exceeds the parameter and loses at most stalled ticks
+            self.assertAlmostEqual(period, 1.0 / js_rate, delta=0.1 / js_rate)
+            self.assertLess(r, 1.05 * js_rate, topic)
+            self.assertGreater(r, 0.6 * js_rate, topic)
+        rospy.loginfo('1 kHz in, published: ' + '; '.join(report))
         # the last published state equals the packet it came from, field by field
         last = fresh[-1]
         sent = console.sent[last.packet_seq][0]

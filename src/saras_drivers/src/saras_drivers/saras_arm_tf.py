@@ -1,0 +1,156 @@
+"""Joint transforms of a URDF (what robot_state_publisher computes), ROS-agnostic.
+
+Used by ``saras_arms_state`` (``~publish_tf``) to broadcast a SARAS arm's TF itself, one
+TFMessage per state sample: robot_state_publisher subscribes to ``joint_states`` with a queue of
+one, so on a loaded host it keeps only the newest of the samples that arrived while it was not
+scheduled and the arm's TF rate falls far below the state rate.
+
+Supported joint types: ``revolute``, ``continuous``, ``prismatic`` (one axis) and ``fixed``;
+``mimic`` joints follow ``multiplier * q + offset``. Units: m, rad. Quaternions [x, y, z, w].
+"""
+
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+MOVING = ('revolute', 'continuous', 'prismatic')
+
+
+def rpy_to_matrix(r, p, y):
+    """URDF fixed-axis roll-pitch-yaw: R = Rz(y) Ry(p) Rx(r)."""
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def axis_angle_to_matrix(axis, angle):
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k.dot(k)
+
+
+def matrix_to_quaternion(r):
+    """Rotation matrix -> unit quaternion [x, y, z, w] (w >= 0), numerically robust branch."""
+    t = r[0, 0] + r[1, 1] + r[2, 2]
+    if t > 0.0:
+        s = 2.0 * math.sqrt(t + 1.0)
+        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
+    if q[3] < 0.0:
+        q = [-x for x in q]
+    return q
+
+
+class Joint(object):
+    """One URDF joint: ``origin`` (4x4, parent -> joint frame at q = 0), unit ``axis``."""
+
+    def __init__(self, name, jtype, parent, child, origin, axis, mimic=None):
+        self.name, self.type, self.parent, self.child = name, jtype, parent, child
+        self.origin = origin
+        self.axis = axis
+        self.mimic = mimic          # (joint name, multiplier, offset) or None
+
+    def transform(self, q):
+        """parent -> child [4x4] at joint position q [rad or m]."""
+        if self.type == 'fixed':
+            return self.origin
+        m = np.eye(4)
+        if self.type == 'prismatic':
+            m[:3, 3] = self.axis * q
+        else:
+            m[:3, :3] = axis_angle_to_matrix(self.axis, q)
+        return self.origin.dot(m)
+
+
+class UrdfTf(object):
+    """Transforms of the joints of a URDF string.
+
+    :meth:`moving` -> ``[(parent, child, xyz, xyzw)]`` of the movable joints for a joint vector
+    (in the order of ``joint_names``); :meth:`fixed` -> the same for the fixed joints.
+    :raises ValueError: unparsable URDF, a joint type other than those supported, or a joint of
+        ``joint_names`` that the URDF does not have.
+    """
+
+    def __init__(self, urdf_xml, joint_names):
+        try:
+            root = ET.fromstring(urdf_xml)
+        except ET.ParseError as e:
+            raise ValueError('robot_description is not valid XML: %s' % e)
+        self.joints = []
+        for j in root.findall('joint'):
+            jtype = j.get('type')
+            if jtype not in MOVING + ('fixed',):
+                raise ValueError('joint %s: unsupported type %r' % (j.get('name'), jtype))
+            o = j.find('origin')
+            xyz = [float(x) for x in (o.get('xyz', '0 0 0') if o is not None else '0 0 0').split()]
+            rpy = [float(x) for x in (o.get('rpy', '0 0 0') if o is not None else '0 0 0').split()]
+            origin = np.eye(4)
+            origin[:3, :3] = rpy_to_matrix(*rpy)
+            origin[:3, 3] = xyz
+            a = j.find('axis')
+            axis = np.array([float(x) for x in (a.get('xyz') if a is not None else '1 0 0').split()])
+            if jtype != 'fixed':
+                n = np.linalg.norm(axis)
+                if not n > 0.0:
+                    raise ValueError('joint %s: zero axis' % j.get('name'))
+                axis = axis / n
+            mm = j.find('mimic')
+            mimic = None
+            if mm is not None:
+                mimic = (mm.get('joint'), float(mm.get('multiplier', 1.0)), float(mm.get('offset', 0.0)))
+            self.joints.append(Joint(j.get('name'), jtype, j.find('parent').get('link'),
+                                     j.find('child').get('link'), origin, axis, mimic))
+        self.joint_names = list(joint_names)
+        self._index = {n: i for i, n in enumerate(self.joint_names)}
+        self.movable = [j for j in self.joints if j.type in MOVING]
+        self._cache = [None] * len(self.movable)
+        for j in self.movable:
+            src = j.mimic[0] if j.mimic else j.name
+            if src not in self._index:
+                raise ValueError('URDF joint %s is not in the published joint list' % src)
+
+    def _q(self, joint, q):
+        if joint.mimic:
+            name, mult, off = joint.mimic
+            return mult * q[self._index[name]] + off
+        return q[self._index[joint.name]]
+
+    def moving(self, q):
+        """Transforms of the movable joints; a joint whose position did not change since the
+        previous call reuses its result (the passive arm joints are constant)."""
+        out = []
+        for k, j in enumerate(self.movable):
+            v = self._q(j, q)
+            c = self._cache[k]
+            if c is None or c[0] != v:
+                t = j.transform(v)
+                c = (v, (j.parent, j.child, t[:3, 3], matrix_to_quaternion(t[:3, :3])))
+                self._cache[k] = c
+            out.append(c[1])
+        return out
+
+    def fixed(self):
+        return [(j.parent, j.child, j.origin[:3, 3], matrix_to_quaternion(j.origin[:3, :3]))
+                for j in self.joints if j.type == 'fixed']
+
+    def chain(self, q, root, tip):
+        """root -> tip [4x4] by composing the joint transforms (tests, diagnostics)."""
+        by_child = {j.child: j for j in self.joints}
+        m = np.eye(4)
+        link = tip
+        while link != root:
+            if link not in by_child:
+                raise ValueError('%s is not below %s' % (tip, root))
+            j = by_child[link]
+            m = (j.transform(self._q(j, q)) if j.type != 'fixed' else j.origin).dot(m)
+            link = j.parent
+        return m
