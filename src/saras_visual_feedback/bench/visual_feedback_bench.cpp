@@ -31,6 +31,7 @@
 
 #include "saras_visual_feedback/image_pool.h"
 #include "saras_visual_feedback/overlay.h"
+#include "saras_visual_feedback/pose_history.h"
 
 using namespace saras_visual_feedback;  // NOLINT(build/namespaces) benchmark driver
 
@@ -94,6 +95,20 @@ int runCore(int iterations)
     const char* labels[4] = {"mesa_left", "mesa_right", "PSM1", "PSM2"};
     Stats copy, draw, per_eye, per_pair, cpu_eye;
     HudCache hud[2];
+    // Each tool's pose history (512 samples at 250 Hz, as the nodelet keeps): the tips are looked
+    // up at the image stamp, 50 ms behind the newest pose, inside the timed section.
+    PoseHistory history[4];
+    const std::int64_t kPosePeriod = 4000000;  // [ns] 250 Hz
+    for (std::int64_t j = 0; j < 512; ++j)
+      for (int i = 0; i < 4; ++i)
+      {
+        TimedPose p;
+        p.stamp_ns = j * kPosePeriod;
+        p.position[0] = -0.03 + 0.02 * i + 0.005 * std::sin(1e-9 * p.stamp_ns);
+        p.position[1] = 0.01 * std::cos(1e-9 * p.stamp_ns + i);
+        p.position[2] = 0.1;
+        history[i].push(p);
+      }
     for (int it = 0; it < iterations; ++it)
     {
       const double phase = 0.05 * it;
@@ -114,6 +129,14 @@ int runCore(int iterations)
         const auto t0 = std::chrono::steady_clock::now();
         input.copyTo(out[e]);  // the nodelet's one memcpy into a pooled output buffer
         const auto t1 = std::chrono::steady_clock::now();
+        const std::int64_t image_stamp = 511 * kPosePeriod - 50000000 + (it % 97) * 123457;
+        for (int i = 0; i < 4; ++i)
+        {
+          const PoseLookupResult r = history[i].lookup(image_stamp);
+          tools[i].tip.x = r.pose.position[0];
+          tools[i].shaft = tools[i].tip + cv::Point3d(0.02, -0.03, 0.035);
+        }
+        tools[3].tip.x = 0.4;
         drawOverlay(out[e], ChannelOrder::kBgr, eye[e], style, tools, 4, nullptr, nullptr, &hud[e]);
         const auto t2 = std::chrono::steady_clock::now();
         cpu_eye.v.push_back(threadCpuMs() - c0);
@@ -194,7 +217,9 @@ public:
     latency_.v.push_back(latency_ms);
   }
 
-  void publishAuxiliary(double t)
+  /// Tool poses (every frame, stamped now); the distances only when @p distances (20 Hz as
+  /// /collision/distances: they change the HUD text, which is re-rendered on change).
+  void publishAuxiliary(double t, bool distances)
   {
     for (int s = 0; s < 2; ++s)
     {
@@ -206,6 +231,8 @@ public:
       p.pose.orientation.w = 1.0;
       pose_pub_[s].publish(p);
     }
+    if (!distances)
+      return;
     std_msgs::Float64MultiArray d;
     d.data = {0.015 + 0.015 * std::sin(t), 0.015 + 0.015 * std::cos(t), 0.05, 0.05};
     dist_pub_.publish(d);
@@ -310,8 +337,8 @@ int runPipeline(int argc, char** argv)
   int k = 0;
   while ((ros::WallTime::now() - start).toSec() < seconds && ros::ok())
   {
-    if (k % 4 == 0)
-      pipe.publishAuxiliary(0.02 * k);
+    // Poses with every frame (the nodelet draws them at the image stamp), distances at rate / 3.
+    pipe.publishAuxiliary(0.02 * k, k % 3 == 0);
     pipe.publishFrame();
     ++k;
     r.sleep();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -105,6 +106,12 @@ void VisualFeedbackNodelet::readParameters()
   pose_timeout_ = readPositive(pnh, "pose_timeout", 0.5, "[s]");
   distances_timeout_ = readPositive(pnh, "distances_timeout", 0.5, "[s]");
   image_timeout_ = readPositive(pnh, "image_timeout", 1.0, "[s]");
+  pnh.param("pose_buffer_size", pose_buffer_size_, 512);
+  if (pose_buffer_size_ < 2 || pose_buffer_size_ > 100000)
+    throw paramError("pose_buffer_size", "must be in [2, 100000] samples, got " + std::to_string(pose_buffer_size_));
+  pnh.param("pose_stamp_tolerance", pose_stamp_tolerance_, 0.03);
+  if (!(std::isfinite(pose_stamp_tolerance_) && pose_stamp_tolerance_ >= 0.0))
+    throw paramError("pose_stamp_tolerance", "must be finite and >= 0 [s], got " + std::to_string(pose_stamp_tolerance_));
   pnh.param("jpeg_quality", jpeg_quality_, 80);
   if (jpeg_quality_ < 1 || jpeg_quality_ > 100)
     throw paramError("jpeg_quality", "must be in [1, 100], got " + std::to_string(jpeg_quality_));
@@ -141,6 +148,7 @@ void VisualFeedbackNodelet::readParameters()
     if (list[i].getType() != XmlRpc::XmlRpcValue::TypeStruct)
       throw paramError(where, "must be a dictionary");
     Tool& t = tools_[i];
+    t.history.setCapacity(static_cast<std::size_t>(pose_buffer_size_));
     t.name = xmlString(list[i], "name", where, true);
     t.label = xmlString(list[i], "label", where, false, t.name);
     t.pose_topic = xmlString(list[i], "pose_topic", where, true);
@@ -293,9 +301,38 @@ void VisualFeedbackNodelet::poseCb(const geometry_msgs::PoseStampedConstPtr& msg
                            static_cast<unsigned long long>(n), pose_timeout_);
     return;
   }
+  // The sample is stamped with the pose's header.stamp (receipt time when unstamped), the clock of
+  // the images' stamps, so that imageCb can take the pose at the image stamp.
+  const ros::Time now = ros::Time::now();
+  TimedPose sample;
+  sample.stamp_ns = static_cast<std::int64_t>((msg->header.stamp.isZero() ? now : msg->header.stamp).toNSec());
+  sample.position[0] = msg->pose.position.x;
+  sample.position[1] = msg->pose.position.y;
+  sample.position[2] = msg->pose.position.z;
+  const geometry_msgs::Quaternion& q = msg->pose.orientation;
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (norm > 1e-9)  // unset orientation (all zero): identity (only the tip position is drawn)
+  {
+    sample.orientation[0] = q.x / norm;
+    sample.orientation[1] = q.y / norm;
+    sample.orientation[2] = q.z / norm;
+    sample.orientation[3] = q.w / norm;
+  }
   std::lock_guard<std::mutex> lock(state_mutex_);
-  tools_[i].pose = msg;
-  tools_[i].pose_received = ros::Time::now();
+  Tool& t = tools_[i];
+  if (t.frame_id != msg->header.frame_id)
+  {
+    t.history.clear();  // poses of different frames are not interpolated
+    t.frame_id = msg->header.frame_id;
+  }
+  if (t.history.push(sample) == PosePush::kRestarted)
+  {
+    ++t.restarts;
+    NODELET_WARN_THROTTLE(5.0, "pose stamps of %s on %s went backwards (clock reset?): pose history restarted "
+                               "(%llu times)",
+                          t.name.c_str(), t.pose_topic.c_str(), static_cast<unsigned long long>(t.restarts));
+  }
+  t.pose_received = now;
 }
 
 void VisualFeedbackNodelet::distancesCb(const std_msgs::Float64MultiArrayConstPtr& msg)
@@ -363,15 +400,18 @@ void VisualFeedbackNodelet::reconfigureCb(VisualFeedbackConfig& c, uint32_t /*le
 
 bool VisualFeedbackNodelet::transformPoint(const std::string& target, const std::string& source,
                                            const ros::Time& stamp, const cv::Point3d& p, cv::Point3d* out,
-                                           std::string* error) const
+                                           bool* at_stamp, std::string* error) const
 {
+  // No timeout: never blocks the image callback.
   geometry_msgs::TransformStamped t;
+  *at_stamp = true;
   try
   {
     t = tf_buffer_->lookupTransform(target, source, stamp);
   }
   catch (const tf2::TransformException&)
   {
+    *at_stamp = false;
     try
     {
       t = tf_buffer_->lookupTransform(target, source, ros::Time(0));  // latest available
@@ -479,8 +519,13 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
   double shaft_length;
   bool draw_dvrk;
   std::array<ToolOverlay, kMaxTools> overlays;
-  std::array<geometry_msgs::PoseStampedConstPtr, kMaxTools> poses;
+  std::array<PoseLookupResult, kMaxTools> poses;  // status kEmpty: no fresh pose
   std::size_t n = 0;
+  // The tools are drawn where they were when the image was taken: poses interpolated at the image
+  // stamp (an unstamped image gets the newest poses, counted as fallbacks).
+  const std::int64_t image_stamp_ns = image->header.stamp.isZero()
+                                          ? std::numeric_limits<std::int64_t>::max()
+                                          : static_cast<std::int64_t>(image->header.stamp.toNSec());
   {
     std::lock_guard<std::mutex> lock(state_mutex_);
     style = style_;
@@ -499,8 +544,10 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
                        : std::numeric_limits<double>::quiet_NaN();
       if (std::isinf(o.distance) && o.distance < 0)
         o.distance = std::numeric_limits<double>::quiet_NaN();
-      const bool pose_fresh = t.pose && (now - t.pose_received).toSec() <= pose_timeout_;
-      poses[n] = pose_fresh ? t.pose : geometry_msgs::PoseStampedConstPtr();
+      const bool pose_fresh = !t.history.empty() && (now - t.pose_received).toSec() <= pose_timeout_;
+      poses[n] = pose_fresh ? t.history.lookup(image_stamp_ns) : PoseLookupResult();
+      if (pose_fresh)
+        eye.pose_frames[n] = t.frame_id;  // string capacity reused: no allocation in steady state
       ++n;
     }
   }
@@ -514,24 +561,59 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
     if (t.dvrk && !draw_dvrk)
       continue;
     ToolOverlay& o = overlays[k];
-    const geometry_msgs::PoseStampedConstPtr& pose = poses[k];
+    const PoseLookupResult& pose = poses[k];
+    const std::string& pose_frame = eye.pose_frames[k];
     ++k;
-    if (!pose || !model_ok)
+    if (pose.status == PoseLookup::kEmpty || !model_ok)
       continue;
-    const cv::Point3d tip_in_pose(pose->pose.position.x, pose->pose.position.y, pose->pose.position.z);
-    if (!transformPoint(camera_frame, pose->header.frame_id, image->header.stamp, tip_in_pose, &o.tip, &why))
+    const bool pose_at_stamp =
+        pose.status == PoseLookup::kInterpolated ||
+        (pose.status == PoseLookup::kAfterNewest && pose.offset_ns <= static_cast<std::int64_t>(pose_stamp_tolerance_ * 1e9));
+    if (!pose_at_stamp)
+    {
+      ++eye.pose_fallbacks;
+      if (image->header.stamp.isZero())
+        NODELET_WARN_THROTTLE(2.0, "%s image has no stamp: drawing %s at its latest pose (%llu fallbacks)",
+                              eye.name.c_str(), t.name.c_str(),
+                              static_cast<unsigned long long>(eye.pose_fallbacks.load()));
+      else
+        NODELET_WARN_THROTTLE(2.0, "%s image stamp %.3f s is %.3f s %s the buffered poses of %s: drawing its latest "
+                                   "pose (%llu fallbacks; see pose_buffer_size, pose_stamp_tolerance)",
+                              eye.name.c_str(), image->header.stamp.toSec(), pose.offset_ns * 1e-9,
+                              pose.status == PoseLookup::kAfterNewest ? "newer than" : "older than",
+                              t.name.c_str(), static_cast<unsigned long long>(eye.pose_fallbacks.load()));
+    }
+    const cv::Point3d tip_in_pose(pose.pose.position[0], pose.pose.position[1], pose.pose.position[2]);
+    bool at_stamp = true;
+    if (!transformPoint(camera_frame, pose_frame, image->header.stamp, tip_in_pose, &o.tip, &at_stamp, &why))
     {
       ++eye.tf_failures;
-      NODELET_ERROR_THROTTLE(2.0, "no transform %s -> %s for %s (%s); the tool is not drawn", pose->header.frame_id.c_str(),
+      NODELET_ERROR_THROTTLE(2.0, "no transform %s -> %s for %s (%s); the tool is not drawn", pose_frame.c_str(),
                              camera_frame.c_str(), t.name.c_str(), why.c_str());
       continue;
+    }
+    if (!at_stamp)
+    {
+      ++eye.tf_fallbacks;
+      NODELET_WARN_THROTTLE(2.0, "no transform %s -> %s at the image stamp %.3f s for %s: latest used (%llu fallbacks)",
+                            pose_frame.c_str(), camera_frame.c_str(), image->header.stamp.toSec(), t.name.c_str(),
+                            static_cast<unsigned long long>(eye.tf_fallbacks.load()));
     }
     o.visible = true;
     cv::Point3d rcm;
     if (!t.rcm_frame.empty())
     {
-      if (transformPoint(camera_frame, t.rcm_frame, image->header.stamp, cv::Point3d(0, 0, 0), &rcm, &why))
+      // The shaft's far point (towards the trocar) at the image stamp too.
+      if (transformPoint(camera_frame, t.rcm_frame, image->header.stamp, cv::Point3d(0, 0, 0), &rcm, &at_stamp, &why))
       {
+        if (!at_stamp)
+        {
+          ++eye.tf_fallbacks;
+          NODELET_WARN_THROTTLE(2.0, "no transform %s -> %s at the image stamp %.3f s for %s's shaft: latest used "
+                                     "(%llu fallbacks)",
+                                t.rcm_frame.c_str(), camera_frame.c_str(), image->header.stamp.toSec(),
+                                t.name.c_str(), static_cast<unsigned long long>(eye.tf_fallbacks.load()));
+        }
         const cv::Point3d d = rcm - o.tip;
         const double len = std::sqrt(d.dot(d));
         if (len > 1e-6)
@@ -550,7 +632,18 @@ void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
   }
 
   if (model_ok)
-    drawOverlay(canvas, order, eye.model, style, overlays.data(), n, nullptr, nullptr, &eye.hud);
+  {
+    std::array<ToolDrawResult, kMaxTools> results;
+    drawOverlay(canvas, order, eye.model, style, overlays.data(), n, results.data(), nullptr, &eye.hud);
+    // Colour census: frames in which a tool was drawn (shaft or border marker) in each colour.
+    std::array<bool, 4> seen{};
+    for (std::size_t i = 0; i < n; ++i)
+      if (results[i].drawn != ToolDrawn::kNothing)
+        seen[static_cast<std::size_t>(results[i].proximity)] = true;
+    for (std::size_t c = 0; c < seen.size(); ++c)
+      if (seen[c])
+        ++eye.colour_frames[c];
+  }
   else
   {
     const std::string line = "overlay off: " + why.substr(0, 60);
@@ -597,7 +690,8 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
   const ros::WallTime now = ros::WallTime::now();
   saras_msgs::ComponentStatus msg;
   msg.component = component_;
-  std::uint64_t received = 0, rejected = 0, tf_failures = 0;
+  std::uint64_t received = 0, rejected = 0, tf_failures = 0, fallbacks = 0;
+  std::array<std::uint64_t, 4> colours{};
   std::int64_t last_ns = 0;
   bool subscribed = false;
   std::string model_errors;
@@ -606,6 +700,9 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
     received += e.received;
     rejected += e.rejected;
     tf_failures += e.tf_failures;
+    fallbacks += e.pose_fallbacks + e.tf_fallbacks;
+    for (std::size_t c = 0; c < colours.size(); ++c)
+      colours[c] += e.colour_frames[c];
     last_ns = std::max(last_ns, e.last_image_ns.load());
     subscribed = subscribed || e.pub.getNumSubscribers() > 0 || e.compressed_pub.getNumSubscribers() > 0;
   }
@@ -643,10 +740,19 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
       else
         text << "; ";
     }
+    text << "frames per colour (both eyes): red " << colours[static_cast<int>(Proximity::kCollision)] << ", yellow "
+         << colours[static_cast<int>(Proximity::kWarning)] << ", green " << colours[static_cast<int>(Proximity::kSafe)]
+         << ", grey " << colours[static_cast<int>(Proximity::kUnknown)] << "; ";
     if (tf_failures > tf_failures_reported_)
     {
       msg.level = saras_msgs::ComponentStatus::WARN;
-      text << (tf_failures - tf_failures_reported_) << " missing transforms in the last period";
+      text << (tf_failures - tf_failures_reported_) << " missing transforms in the last period; ";
+    }
+    if (fallbacks > fallbacks_reported_)
+    {
+      msg.level = saras_msgs::ComponentStatus::WARN;
+      text << (fallbacks - fallbacks_reported_) << " poses/transforms not at the image stamp (latest used) in the "
+           << "last period; ";
     }
   }
   msg.message = text.str();
@@ -657,6 +763,7 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
     last_level_ = msg.level;
     last_status_ = now;
     tf_failures_reported_ = tf_failures;
+    fallbacks_reported_ = fallbacks;
   }
 }
 

@@ -28,6 +28,7 @@
 #include "saras_visual_feedback/camera_model.h"
 #include "saras_visual_feedback/image_pool.h"
 #include "saras_visual_feedback/overlay.h"
+#include "saras_visual_feedback/pose_history.h"
 
 namespace saras_visual_feedback
 {
@@ -55,6 +56,11 @@ private:
     bool info_seen = false;
     std::string model_error;                   ///< why the model is invalid ("" when valid)
     std::atomic<std::uint64_t> received{0}, published{0}, rejected{0}, tf_failures{0};
+    /// Tool poses / transforms that could not be taken at the image stamp (latest used instead).
+    std::atomic<std::uint64_t> pose_fallbacks{0}, tf_fallbacks{0};
+    /// Frames in which at least one tool was drawn in each colour, indexed by Proximity.
+    std::array<std::atomic<std::uint64_t>, 4> colour_frames{};
+    std::array<std::string, kMaxTools> pose_frames;  ///< scratch: frame of each tool's pose (no allocation)
     std::atomic<std::uint64_t> busy_ns{0}, max_busy_ns{0};  ///< wall-clock processing time since start [ns]
     std::atomic<std::uint64_t> cpu_ns{0};                    ///< thread CPU time of the processing [ns]
     std::atomic<std::int64_t> last_image_ns{0};              ///< wall time of the last image [ns]
@@ -71,9 +77,11 @@ private:
     bool dvrk = false;         ///< drawn only while draw_dvrk is true
     ros::Subscriber sub;
     // Latched under state_mutex_:
-    geometry_msgs::PoseStampedConstPtr pose;
-    ros::Time pose_received;
+    PoseHistory history;       ///< recent tip poses, in frame_id, stamped with header.stamp
+    std::string frame_id;      ///< frame of the poses in history
+    ros::Time pose_received;   ///< receipt time of the newest pose (for pose_timeout)
     std::uint64_t rejected = 0;
+    std::uint64_t restarts = 0;  ///< history restarted because the pose stamps went backwards
   };
 
   void onInit() override;
@@ -84,9 +92,10 @@ private:
   void distancesCb(const std_msgs::Float64MultiArrayConstPtr& msg);
   void reconfigureCb(VisualFeedbackConfig& config, uint32_t level);
   void statusTimerCb(const ros::WallTimerEvent& event);
-  /// Point @p p of frame @p source expressed in @p target at @p stamp (falls back to the latest).
+  /// Point @p p of frame @p source expressed in @p target at @p stamp; falls back to the latest
+  /// transform (then @p at_stamp is false); false when neither exists.
   bool transformPoint(const std::string& target, const std::string& source, const ros::Time& stamp,
-                      const cv::Point3d& p, cv::Point3d* out, std::string* error) const;
+                      const cv::Point3d& p, cv::Point3d* out, bool* at_stamp, std::string* error) const;
 
   std::shared_ptr<image_transport::ImageTransport> it_;
   std::array<Eye, 2> eyes_;
@@ -113,6 +122,8 @@ private:
   double pose_timeout_ = 0.5;       ///< [s]
   double distances_timeout_ = 0.5;  ///< [s]
   double image_timeout_ = 1.0;      ///< [s] STALE heartbeat without images while subscribed
+  int pose_buffer_size_ = 512;      ///< samples of pose history per tool (≈ 2 s at 250 Hz)
+  double pose_stamp_tolerance_ = 0.02;  ///< [s] an image newer than the newest pose by more is a fallback
   int jpeg_quality_ = 80;          ///< JPEG quality of the compressed stream [1, 100]
   int queue_size_ = 3;             ///< camera subscription queue [frames]
   std::string component_;
@@ -121,6 +132,7 @@ private:
   std::uint8_t last_level_ = 255;
   ros::WallTime last_status_;
   std::uint64_t tf_failures_reported_ = 0;
+  std::uint64_t fallbacks_reported_ = 0;
 
   using ReconfigureServer = dynamic_reconfigure::Server<VisualFeedbackConfig>;
   boost::recursive_mutex reconfigure_mutex_;

@@ -11,6 +11,7 @@
   lazy       no camera/pose subscription while nobody listens; subscribes per eye on demand
 """
 import math
+import re
 import sys
 import threading
 import time
@@ -84,9 +85,25 @@ class TestVisualFeedback(unittest.TestCase):
         getattr(self, 'scenario_' + self.mode)()
 
     def scenario_nominal(self):
+        statuses = []
+        rospy.Subscriber('/saras/status', ComponentStatus, statuses.append, queue_size=50)
         outs = self.check_rate()
         self.check_drawing(outs)
+        self.check_colour_census(statuses)
         self.check_compressed()
+
+    def check_colour_census(self, statuses):
+        """The heartbeat counts the frames drawn in each colour: the scene has all three."""
+        vf = [s for s in statuses if s.component.endswith('visual_feedback') and 'frames per colour' in s.message]
+        self.assertTrue(vf, 'no heartbeat with the colour census')
+        m = re.search(r'red (\d+), yellow (\d+), green (\d+), grey (\d+)', vf[-1].message)
+        self.assertIsNotNone(m, vf[-1].message)
+        red, yellow, green, _ = (int(g) for g in m.groups())
+        # Every output frame has each colour once (both eyes): at least the frames seen so far.
+        n = sum(o.count for o in self.last_outs.values())
+        rospy.loginfo('colour census: %s (%d frames received)', m.group(0), n)
+        for colour, count in (('red', red), ('yellow', yellow), ('green', green)):
+            self.assertGreater(count, 0.5 * n, '%s drawn in %d frames only (%d received)' % (colour, count, n))
 
     def check_compressed(self):
         """<eye>/image/compressed: JPEG of the augmented image, produced on demand."""
@@ -127,6 +144,7 @@ class TestVisualFeedback(unittest.TestCase):
             with outs[e].lock, ins[e].lock:
                 common = outs[e].stamps & ins[e].stamps
             self.assertGreater(len(common), 0.9 * n_in)
+        self.last_outs = outs
         return outs
 
     def check_drawing(self, outs):

@@ -57,6 +57,16 @@ class TestBadParams(unittest.TestCase):
         self.assertIsNotNone(code)
         self.assertIn('safe_colour', out)
 
+    def test_visual_feedback_rejects_bad_pose_history(self):
+        code, out = run('visual_feedback_node', ['__name:=vf_bad_history', '_pose_buffer_size:=1'])
+        self.assertIsNotNone(code, 'node kept running with pose_buffer_size = 1')
+        self.assertNotEqual(code, 0)
+        self.assertIn('pose_buffer_size', out)
+        code, out = run('visual_feedback_node', ['__name:=vf_bad_tolerance', '_pose_stamp_tolerance:=-0.1'])
+        self.assertIsNotNone(code, 'node kept running with pose_stamp_tolerance < 0')
+        self.assertNotEqual(code, 0)
+        self.assertIn('pose_stamp_tolerance', out)
+
 
 if __name__ == '__main__':
     rospy.init_node('check_bad_params', anonymous=True)

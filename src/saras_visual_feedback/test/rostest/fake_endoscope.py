@@ -36,6 +36,9 @@ class FakeEndoscope:
         self.data = [b''.join(bytes([20 + (y % 40), 30, 40 + e * 10]) * scene.WIDTH for y in range(scene.HEIGHT))
                      for e in (0, 1)]
         del row
+        # Tool tips in their pose frames (constant): computed once.
+        self.tips = {name: tuple(float(c) for c in scene.to_frame(frame, tip_world))
+                     for name, (_, frame, tip_world, _, _) in scene.TOOLS.items()}
         self.count = 0
 
     @staticmethod
@@ -56,7 +59,7 @@ class FakeEndoscope:
             p = PoseStamped()
             p.header.stamp = rospy.Time.now()
             p.header.frame_id = frame
-            x, y, z = scene.to_frame(frame, tip_world)
+            x, y, z = self.tips[name]
             p.pose.position.x, p.pose.position.y, p.pose.position.z = (float('nan'), y, z) if bad else (x, y, z)
             p.pose.orientation.w = 1.0
             self.pose_pubs[name].publish(p)
@@ -92,8 +95,7 @@ class FakeEndoscope:
     def run(self):
         r = rospy.Rate(self.rate)
         while not rospy.is_shutdown():
-            if self.count % 2 == 0:
-                self.publish_state()
+            self.publish_state()  # poses stamped just before the images: drawn at the image stamp
             if self.images:
                 self.publish_images()
             self.count += 1
