@@ -1,9 +1,13 @@
 // Benchmark of the saras_collision core (run through bench/run; not a test).
-//  1. Per-query time of our exact functions vs fcl::distance (libfcl 0.7, GJK/libccd for
-//     capsule-box and sphere-box, FCL's closed form for capsule-capsule) on the same random
-//     queries, at FCL's default distance_tolerance (1e-6) and at a tight one (1e-12, the
-//     setting needed to agree with the exact distance within 1e-6 m).
-//     FCL shapes are built once outside the timed loop (only the query is timed).
+//  1. Per-query time of our exact functions, with the deliverable signatures, vs fcl::distance
+//     (libfcl 0.7: its closed form for capsule-capsule and sphere-box, GJK/libccd for
+//     capsule-box) on the same random queries, at FCL's default distance_tolerance (1e-6) and
+//     at a tight one (1e-12, needed to agree with the exact distance within 1e-6 m).
+//     Fairness: FCL shapes and transforms are built once outside the timed loops; both sides
+//     read compact arrays of the same NQ (default 256) queries, hot in cache as the scene's
+//     data is in the node; each side's loop is a direct (inlined-lambda) loop, no std::function;
+//     one warm-up pass each, then REPS (default 41) repetitions with ours and FCL alternating
+//     inside every repetition (same machine load); median and minimum over the repetitions.
 //  2. Full colliding_regions cycle (4 tools: 6 tool pairs + 4 x N boxes) for N = 10, 100, 1000,
 //     with and without bounding-sphere culling.
 #include <fcl/geometry/shape/box.h>
@@ -14,9 +18,9 @@
 #include <Eigen/Geometry>
 
 #include <chrono>
-#include <functional>
-#include <memory>
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <vector>
 
@@ -37,18 +41,27 @@ struct Query
   double r1, r2;
   OrientedBox box;
   Vector3d v[8];
-  fcl::Transform3d tf_cap1, tf_cap2, tf_box, tf_sphere;
-  std::shared_ptr<fcl::Capsuled> cap1, cap2;
-  std::shared_ptr<fcl::Boxd> fbox;
-  std::shared_ptr<fcl::Sphered> sphere;
 };
 
-std::vector<Query> makeQueries(int n, std::mt19937_64& gen)
+/// FCL's side of one query, built once (shapes and transforms), kept apart from ours so that
+/// neither side reads the other's data.
+struct FclQuery
+{
+  fcl::Transform3d tf_cap1, tf_cap2, tf_box, tf_sphere;
+  fcl::Capsuled cap1{ 0.0, 0.0 }, cap2{ 0.0, 0.0 };
+  fcl::Boxd box{ 0.0, 0.0, 0.0 };
+  fcl::Sphered sphere{ 0.0 };
+};
+
+std::vector<Query> makeQueries(int n, std::mt19937_64& gen, std::vector<FclQuery>& fqs)
 {
   std::uniform_real_distribution<double> u(-1.0, 1.0), len(0.001, 0.12), rad(0.0, 0.01), half(0.003, 0.04);
   std::vector<Query> qs(n);
-  for (Query& q : qs)
+  fqs.resize(n);
+  for (int k = 0; k < n; ++k)
   {
+    Query& q = qs[k];
+    FclQuery& f = fqs[k];
     auto segment = [&](Vector3d& a, Vector3d& b) {
       a = 0.08 * Vector3d(u(gen), u(gen), u(gen));
       b = a + Vector3d(u(gen), u(gen), u(gen)).normalized() * len(gen);
@@ -68,28 +81,28 @@ std::vector<Query> makeQueries(int n, std::mt19937_64& gen)
       tf.linear() = Eigen::Quaterniond::FromTwoVectors(Vector3d::UnitZ(), b - a).toRotationMatrix();
       return tf;
     };
-    q.tf_cap1 = capsuleTf(q.p1, q.p2);
-    q.tf_cap2 = capsuleTf(q.p3, q.p4);
-    q.tf_box = fcl::Transform3d::Identity();
-    q.tf_box.translation() = q.box.center;
-    q.tf_box.linear() = q.box.axes;
-    q.tf_sphere = fcl::Transform3d::Identity();
-    q.tf_sphere.translation() = q.p1;
-    q.cap1 = std::make_shared<fcl::Capsuled>(q.r1, (q.p2 - q.p1).norm());
-    q.cap2 = std::make_shared<fcl::Capsuled>(q.r2, (q.p4 - q.p3).norm());
-    q.fbox = std::make_shared<fcl::Boxd>(2 * q.box.half);
-    q.sphere = std::make_shared<fcl::Sphered>(q.r1);
+    f.tf_cap1 = capsuleTf(q.p1, q.p2);
+    f.tf_cap2 = capsuleTf(q.p3, q.p4);
+    f.tf_box = fcl::Transform3d::Identity();
+    f.tf_box.translation() = q.box.center;
+    f.tf_box.linear() = q.box.axes;
+    f.tf_sphere = fcl::Transform3d::Identity();
+    f.tf_sphere.translation() = q.p1;
+    f.cap1 = fcl::Capsuled(q.r1, (q.p2 - q.p1).norm());
+    f.cap2 = fcl::Capsuled(q.r2, (q.p4 - q.p3).norm());
+    f.box = fcl::Boxd(2 * q.box.half);
+    f.sphere = fcl::Sphered(q.r1);
   }
   return qs;
 }
 
+/// Time of one pass of @p pass over @p n queries, per query [ns].
 template <typename F>
-double nsPerCall(int calls, F&& f)
+double nsPerPass(int n, F&& pass)
 {
   const auto t0 = Clock::now();
-  for (int i = 0; i < calls; ++i)
-    f(i);
-  return std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls;
+  pass();
+  return std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / n;
 }
 
 /// Best of @p reps runs (the machine is shared).
@@ -98,7 +111,12 @@ double bestNs(int reps, int calls, F&& f)
 {
   double best = 1e300;
   for (int r = 0; r < reps; ++r)
-    best = std::min(best, nsPerCall(calls, f));
+  {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < calls; ++i)
+      f(i);
+    best = std::min(best, std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls);
+  }
   return best;
 }
 }  // namespace
@@ -106,76 +124,106 @@ double bestNs(int reps, int calls, F&& f)
 int main()
 {
   std::mt19937_64 gen(42);
-  const int n = 2000;
-  const std::vector<Query> qs = makeQueries(n, gen);
-  const int reps = 25;  // the machine is shared: the minimum is the uncontended time
+  const char* nq = std::getenv("NQ");
+  const char* nr = std::getenv("REPS");
+  const int n = nq != nullptr ? std::max(1, std::atoi(nq)) : 256;
+  const int reps = nr != nullptr ? std::max(1, std::atoi(nr)) : 41;
+  std::vector<FclQuery> fqs;
+  const std::vector<Query> qs = makeQueries(n, gen, fqs);
 
-  std::printf("# saras_collision benchmark: %d random queries, best of %d runs, ns per query\n", n, reps);
-  std::printf("%-18s %12s %14s %14s %10s %10s\n", "query", "ours [ns]", "FCL 1e-6 [ns]", "FCL 1e-12 [ns]",
+  std::printf("# saras_collision benchmark: %d random queries (same for both), %d repetitions, ns per query\n", n,
+              reps);
+  std::printf("# median [minimum] over the repetitions; ratio = FCL / ours (medians)\n");
+  std::printf("%-18s %16s %18s %18s %10s %11s\n", "query", "ours [ns]", "FCL 1e-6 [ns]", "FCL 1e-12 [ns]",
               "ratio 1e-6", "ratio 1e-12");
 
-  auto fclQuery = [&](double tol, int kind) {
-    return [&qs, tol, kind](int i) {
+  auto fclLoop = [&fqs, n](double tol, int kind) {
+    return [&fqs, n, tol, kind]() {
       fcl::DistanceRequestd req;
       req.distance_tolerance = tol;
-      req.enable_nearest_points = true;
-      fcl::DistanceResultd res;
-      const Query& q = qs[i];
-      if (kind == 0)
-        fcl::distance(q.cap1.get(), q.tf_cap1, q.cap2.get(), q.tf_cap2, req, res);
-      else if (kind == 1)
-        fcl::distance(q.cap1.get(), q.tf_cap1, q.fbox.get(), q.tf_box, req, res);
-      else
-        fcl::distance(q.sphere.get(), q.tf_sphere, q.fbox.get(), q.tf_box, req, res);
-      g_sink = g_sink + res.min_distance;
+      req.enable_nearest_points = true;  // ours returns the points too
+      for (int i = 0; i < n; ++i)
+      {
+        const FclQuery& q = fqs[i];
+        fcl::DistanceResultd res;
+        if (kind == 0)
+          fcl::distance(&q.cap1, q.tf_cap1, &q.cap2, q.tf_cap2, req, res);
+        else if (kind == 1)
+          fcl::distance(&q.cap1, q.tf_cap1, &q.box, q.tf_box, req, res);
+        else
+          fcl::distance(&q.sphere, q.tf_sphere, &q.box, q.tf_box, req, res);
+        g_sink = g_sink + res.min_distance;
+      }
     };
   };
 
-  double d;
-  Vector3d a, b;
-  auto capsuleCapsule = [&](int i) {
-    const Query& q = qs[i];
-    saras_collision::dist_capsule_to_capsule(q.p1, q.p2, q.p3, q.p4, q.r1, q.r2, d, a, b);
-    g_sink = g_sink + d;
+  auto capsuleCapsule = [&]() {
+    double d;
+    Vector3d a, b;
+    for (const Query& q : qs)
+    {
+      saras_collision::dist_capsule_to_capsule(q.p1, q.p2, q.p3, q.p4, q.r1, q.r2, d, a, b);
+      g_sink = g_sink + d;
+    }
   };
-  auto capsuleBox = [&](int i) {
-    const Query& q = qs[i];
-    g_sink = g_sink + saras_collision::capsuleBox(q.p1, q.p2, q.r1, q.box).distance;
+  auto capsuleBox = [&]() {
+    for (const Query& q : qs)
+      g_sink = g_sink + saras_collision::capsuleBox(q.p1, q.p2, q.r1, q.box).distance;
   };
-  auto capsuleBox8 = [&](int i) {
-    const Query& q = qs[i];
-    saras_collision::dist_capsule_to_parallelepiped(q.p1, q.p2, q.v, q.r1, d, a, b);
-    g_sink = g_sink + d;
+  auto capsuleBox8 = [&]() {
+    double d;
+    Vector3d a, b;
+    for (const Query& q : qs)
+    {
+      saras_collision::dist_capsule_to_parallelepiped(q.p1, q.p2, q.v, q.r1, d, a, b);
+      g_sink = g_sink + d;
+    }
   };
-  auto sphereBox = [&](int i) {
-    const Query& q = qs[i];
-    g_sink = g_sink + saras_collision::capsuleBox(q.p1, q.p1, q.r1, q.box).distance;
+  auto sphereBox = [&]() {
+    for (const Query& q : qs)
+      g_sink = g_sink + saras_collision::capsuleBox(q.p1, q.p1, q.r1, q.box).distance;
   };
-  auto sphereBox8 = [&](int i) {
-    const Query& q = qs[i];
-    saras_collision::dist_sphere_to_parallelepiped(q.p1, q.v, q.r1, d, a, b);
-    g_sink = g_sink + d;
+  auto sphereBox8 = [&]() {
+    double d;
+    Vector3d a, b;
+    for (const Query& q : qs)
+    {
+      saras_collision::dist_sphere_to_parallelepiped(q.p1, q.v, q.r1, d, a, b);
+      g_sink = g_sink + d;
+    }
   };
-  // Ours and FCL alternate inside every repetition so that both see the same machine load;
-  // the minimum over repetitions is kept for each.
-  auto row = [&](const char* name, const std::function<void(int)>& ours, int kind) {
-    double best[3] = { 1e300, 1e300, 1e300 };
-    const std::function<void(int)> f6 = fclQuery(1e-6, kind), f12 = fclQuery(1e-12, kind);
+  auto row = [&](const char* name, auto&& ours, int kind) {
+    const auto f6 = fclLoop(1e-6, kind);
+    const auto f12 = fclLoop(1e-12, kind);
+    ours();  // warm-up (caches, branch predictors, page faults)
+    f6();
+    f12();
+    std::vector<double> t[3];
     for (int r = 0; r < reps; ++r)
     {
-      best[0] = std::min(best[0], nsPerCall(n, ours));
-      best[1] = std::min(best[1], nsPerCall(n, f6));
-      best[2] = std::min(best[2], nsPerCall(n, f12));
+      t[0].push_back(nsPerPass(n, ours));
+      t[1].push_back(nsPerPass(n, f6));
+      t[2].push_back(nsPerPass(n, f12));
     }
-    std::printf("%-18s %12.1f %14.1f %14.1f %9.1fx %9.1fx\n", name, best[0], best[1], best[2], best[1] / best[0],
-                best[2] / best[0]);
+    double med[3], lo[3];
+    for (int i = 0; i < 3; ++i)
+    {
+      std::sort(t[i].begin(), t[i].end());
+      med[i] = t[i][t[i].size() / 2];
+      lo[i] = t[i].front();
+    }
+    char c[3][40];
+    for (int i = 0; i < 3; ++i)
+      std::snprintf(c[i], sizeof(c[i]), "%.1f [%.1f]", med[i], lo[i]);
+    std::printf("%-18s %16s %18s %18s %9.1fx %10.1fx\n", name, c[0], c[1], c[2], med[1] / med[0], med[2] / med[0]);
   };
   row("capsule-capsule", capsuleCapsule, 0);
-  row("capsule-box", capsuleBox, 1);
   row("capsule-box (8 v)", capsuleBox8, 1);
-  row("sphere-box", sphereBox, 2);
   row("sphere-box (8 v)", sphereBox8, 2);
-  std::printf("(8 v: deliverable signature, box rebuilt and validated from its 8 vertices on every call)\n\n");
+  row("capsule-box (box)", capsuleBox, 1);
+  row("sphere-box (box)", sphereBox, 2);
+  std::printf("(8 v: deliverable signatures, box validated from its 8 vertices on every call; box: prebuilt\n"
+              " OrientedBox, capsuleBox(), as the node uses)\n\n");
 
   std::printf("# full cycle: 4 tools (6 capsule pairs + 4 x N capsule-box), best of %d runs\n", reps);
   std::printf("%-8s %16s %18s\n", "N boxes", "culling [us]", "no culling [us]");

@@ -4,9 +4,21 @@
 
 #include <Eigen/Geometry>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+// Hot helpers are forced inline: GCC -O2 keeps a large helper called from several places out
+// of line and then passes its results through the stack.
+#if defined(__GNUC__)
+#define SARAS_COLLISION_INLINE inline __attribute__((always_inline))
+#else
+#define SARAS_COLLISION_INLINE inline
+#endif
 
 namespace saras_collision
 {
@@ -15,6 +27,9 @@ namespace
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Squared length below which a capsule axis is treated as a point [m^2] (length < 1e-15 m).
 constexpr double kDegenerateLength2 = 1e-30;
+/// Squared axis-to-axis distance below which the capsule-capsule normal is taken from the axes
+/// directions, not from the (then meaningless) closest-point difference [m^2] (1e-100 m).
+constexpr double kMinAxis2 = 1e-200;
 
 inline bool validRadius(double r)
 {
@@ -28,15 +43,66 @@ inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
   return std::isfinite((a + b).sum() + (a - b).sum());
 }
 
-// std::min/std::max compile to branch-free minsd/maxsd (random inputs mispredict branches).
+/**
+ * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
+ * front of the computation): the inputs are finite and the radii >= 0 iff the computed
+ * distance is finite and the radii >= 0. Proof of "if": the axis parameters s, t are always
+ * finite (clamped with maxsd / minsd, which return the bound for NaN), so a NaN / +-inf
+ * coordinate of P1 or P2 makes a coordinate of q1 = P1 + s (P2 - P1) NaN or infinite (likewise
+ * P3, P4 and q2), hence |q1 - q2| and the distance; a NaN / infinite radius makes the distance
+ * NaN or -inf. Tested for every coordinate (gtest CapsuleCapsule.EveryNonFiniteInputIsRejected).
+ */
+inline bool capsulePairValid(double distance, double r1, double r2)
+{
+  return std::isfinite(distance) && r1 >= 0.0 && r2 >= 0.0;
+}
+
+/// The 8 vertices all finite (pairwise sum, see allFinite).
+inline bool verticesFinite(const Eigen::Vector3d v[])
+{
+  const Eigen::Vector3d s = ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+  return std::isfinite(s.sum());
+}
+
+// Branch-free min / max (minsd / maxsd): GCC -O2 turns std::min / std::max into compare-and-
+// jump sequences, which random queries mispredict. Not for NaN arguments (inputs are checked).
+inline double minD(double a, double b)
+{
+#if defined(__SSE2__)
+  return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(a), _mm_set_sd(b)));
+#else
+  return a < b ? a : b;
+#endif
+}
+
+inline double maxD(double a, double b)
+{
+#if defined(__SSE2__)
+  return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b)));
+#else
+  return a > b ? a : b;
+#endif
+}
+
+/// x < y ? if_less : otherwise, without a branch (and / andnot / or on a compare mask).
+inline double selectLess(double x, double y, double if_less, double otherwise)
+{
+#if defined(__SSE2__)
+  const __m128d mask = _mm_cmplt_sd(_mm_set_sd(x), _mm_set_sd(y));
+  return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(mask, _mm_set_sd(if_less)), _mm_andnot_pd(mask, _mm_set_sd(otherwise))));
+#else
+  return x < y ? if_less : otherwise;
+#endif
+}
+
 inline double clamp01(double x)
 {
-  return std::min(std::max(x, 0.0), 1.0);
+  return minD(maxD(x, 0.0), 1.0);
 }
 
 inline double clampTo(double x, double h)
 {
-  return std::min(std::max(x, -h), h);
+  return minD(maxD(x, -h), h);
 }
 
 DistanceResult invalid(int code)
@@ -60,13 +126,173 @@ Eigen::Vector3d anyPerpendicular(const Eigen::Vector3d& v)
   return v.cross(other).normalized();
 }
 
-int classify(double distance, bool parallel)
+/// Return code of a valid signed @p distance, without branches (random queries would
+/// mispredict them): kIntersecting below -tol, kTangent within +-tol, else @p separated_code
+/// (kSeparated or kParallel).
+inline int classify(double distance, int separated_code = kSeparated)
 {
-  if (distance < -kTangentTolerance)
-    return kIntersecting;
-  if (distance <= kTangentTolerance)
-    return kTangent;
-  return parallel ? kParallel : kSeparated;
+  return static_cast<int>(distance > kTangentTolerance) * separated_code -
+         static_cast<int>(distance < -kTangentTolerance);
+}
+
+/// 1 if the code keeps surface points (not intersecting), else 0: selects the witness points
+/// without a branch.
+inline double surfaceFactor(double distance)
+{
+  return selectLess(distance, -kTangentTolerance, 0.0, 1.0);
+}
+
+/// Edge vectors of 8 box vertices (documented order) and their squared lengths.
+struct BoxEdges
+{
+  Eigen::Vector3d ex, ey, ez;  ///< v1 - v0, v4 - v0, v3 - v0 [m]
+  double lx2, ly2, lz2;  ///< squared edge lengths [m^2]
+};
+
+/**
+ * Checks that 8 vertices are a rectangular box in the documented order, within the relative
+ * tolerance rt (@p rt2 = rt^2):
+ *  - edges finite and not flat: min_i |e_i|^2 > rt^2 |diag|^2, |diag|^2 = sum_i |e_i|^2;
+ *  - rectangular: sum over the 3 edge pairs of cos^2 <= rt^2, tested without division as
+ *    sum (e_i.e_j)^2 |e_k|^2 <= rt^2 |e_x|^2 |e_y|^2 |e_z|^2;
+ *  - order: the 4 residuals v2 - v3 - e_x, v5 - v4 - e_x, v6 - v5 - e_z, v7 - v4 - e_z (zero
+ *    for a box: each is one parallel edge minus another) have a sum of squared norms
+ *    <= rt^2 |diag|^2. Every vertex enters one of them.
+ * Branch-free: one combined test, each written to be false on NaN, so non-finite vertices fail
+ * it (an infinite edge fails the first test, then every residual with a non-finite vertex is
+ * NaN or infinite); only then are the vertices scanned to tell kInvalidInput from kInvalidBox.
+ * @return kSeparated (valid), kInvalidBox or kInvalidInput
+ */
+SARAS_COLLISION_INLINE int validateBox(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
+{
+  const Eigen::Vector3d& v0 = v[0];
+  e.ex = v[1] - v0;
+  e.ey = v[4] - v0;
+  e.ez = v[3] - v0;
+  e.lx2 = e.ex.squaredNorm();
+  e.ly2 = e.ey.squaredNorm();
+  e.lz2 = e.ez.squaredNorm();
+  const double diag2 = e.lx2 + e.ly2 + e.lz2;
+  const double tol2 = rt2 * diag2;
+  const double xy = e.ex.dot(e.ey), xz = e.ex.dot(e.ez), yz = e.ey.dot(e.ez);
+  const double cos2 = (xy * xy) * e.lz2 + (xz * xz) * e.ly2 + (yz * yz) * e.lx2;
+  const Eigen::Array3d r2 = ((v[2] - v[3]) - e.ex).array(), r5 = ((v[5] - v[4]) - e.ex).array();
+  const Eigen::Array3d r6 = ((v[6] - v[5]) - e.ez).array(), r7 = ((v[7] - v[4]) - e.ez).array();
+  const double residual2 = ((r2 * r2 + r5 * r5) + (r6 * r6 + r7 * r7)).sum();
+  // Bitwise & on purpose: one combined test, no branch per condition.
+  const bool ok = (diag2 < std::numeric_limits<double>::infinity()) &
+                  (minD(minD(e.lx2, e.ly2), e.lz2) > tol2) &
+                  (cos2 <= rt2 * (e.lx2 * e.ly2 * e.lz2)) & (residual2 <= tol2);
+  if (ok)
+    return kSeparated;
+  return verticesFinite(v) ? kInvalidBox : kInvalidInput;
+}
+
+/// Fills centre, axes and half extents of @p box from validated vertices (not the bounding
+/// radius). Gram-Schmidt keeps x exact; the residual non-orthogonality is within the
+/// tolerance. The handedness of the vertex order is kept.
+SARAS_COLLISION_INLINE void boxFrame(const Eigen::Vector3d v[], const BoxEdges& e, OrientedBox& box)
+{
+  const double lx = std::sqrt(e.lx2), ly = std::sqrt(e.ly2), lz = std::sqrt(e.lz2);
+  const Eigen::Vector3d x = e.ex * (1.0 / lx);
+  Eigen::Vector3d y = e.ey - e.ey.dot(x) * x;
+  y *= 1.0 / y.norm();
+  const Eigen::Vector3d z = x.cross(y);
+  box.center = 0.5 * (v[0] + v[6]);  // midpoint of the main diagonal
+  box.axes.col(0) = x;
+  box.axes.col(1) = y;
+  box.axes.col(2) = z.dot(e.ez) < 0.0 ? Eigen::Vector3d(-z) : z;
+  box.half = Eigen::Vector3d(lx, ly, lz) * 0.5;
+}
+
+/**
+ * Capsule-capsule core shared by capsuleCapsule() and the deliverable signature (inputs
+ * already validated).
+ *
+ * Segment-segment: minimise |p1 + s d1 - p3 - t d2|^2 over [0,1]^2 (convex quadratic).
+ * Interior stationary point from the 2x2 normal equations (denominator |d1 x d2|^2, taken from
+ * the cross product when nearly parallel to avoid cancellation), clamped; then t is
+ * re-optimised for s and, if t was clamped, s for t (Ericson, Real-Time Collision Detection
+ * 5.1.9). The common path has no data-dependent branch (random queries mispredict them):
+ * the three reciprocals are computed in parallel, the two candidates for s when t is clamped
+ * (t = 0, t = 1) are computed alongside and selected with a mask, and 1 / |v| comes from
+ * 1 / |v|^2, computed in parallel with the square root. Degenerate axes reduce to
+ * point-segment projections.
+ * @return the DistanceCode; @p normal from capsule 2 towards capsule 1
+ */
+SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1, const Eigen::Vector3d& p3,
+                       const Eigen::Vector3d& p4, double r2, double& distance, Eigen::Vector3d& point1,
+                       Eigen::Vector3d& point2, Eigen::Vector3d& normal)
+{
+  const Eigen::Vector3d d1 = p2 - p1;
+  const Eigen::Vector3d d2 = p4 - p3;
+  const Eigen::Vector3d w = p1 - p3;
+  const double a = d1.squaredNorm();
+  const double e = d2.squaredNorm();
+  const double b = d1.dot(d2);
+  const double c = d1.dot(w);
+  const double f = d2.dot(w);
+  double s = 0.0, t = 0.0;
+  bool parallel = false;
+  const bool point1_axis = a <= kDegenerateLength2;
+  const bool point2_axis = e <= kDegenerateLength2;
+  if (!point1_axis && !point2_axis)
+  {
+    // |d1 x d2|^2 = a e - b^2; near parallel the difference cancels, so it is then recomputed
+    // from the cross product (relative error of a e - b^2 ~ 1e-16 / 1e-3 otherwise).
+    double denom = a * e - b * b;
+    if (denom < 1e-3 * a * e)
+      denom = d1.cross(d2).squaredNorm();
+    parallel = !(denom > kParallelSin2 * a * e);
+    // Parallel: any s is optimal up to the clamping of t, fixed below.
+    const double inv_denom = 1.0 / denom, inv_a = 1.0 / a, inv_e = 1.0 / e;  // in parallel
+    const double s_free = parallel ? 0.0 : (b * f - c * e) * inv_denom;
+    const double s_clamped = clamp01(s_free);
+    const double t_free = (b * s_clamped + f) * inv_e;
+    // Candidates for s when t is clamped to 0 or 1, computed in parallel with the above.
+    const double s_t0 = clamp01(-c * inv_a), s_t1 = clamp01((b - c) * inv_a);
+    t = clamp01(t_free);
+    s = selectLess(t_free, 0.0, s_t0, selectLess(1.0, t_free, s_t1, s_clamped));
+  }
+  else if (point1_axis && !point2_axis)
+  {
+    t = clamp01(f / e);
+  }
+  else if (point2_axis && !point1_axis)
+  {
+    s = clamp01(-c / a);
+  }
+  const Eigen::Vector3d q1 = p1 + s * d1;
+  const Eigen::Vector3d q2 = p3 + t * d2;
+  const Eigen::Vector3d v = q1 - q2;
+  const double axis2 = v.squaredNorm();
+  const double axis = std::sqrt(axis2);
+  distance = axis - r1 - r2;
+  const int code = classify(distance, parallel ? kParallel : kSeparated);
+  if (axis2 > kMinAxis2)
+    normal = v * (axis * (1.0 / axis2));  // the division overlaps the square root
+  else if (!point1_axis && !point2_axis && !parallel)
+    normal = d1.cross(d2).normalized();
+  else if (!point1_axis)
+    normal = anyPerpendicular(d1);
+  else if (!point2_axis)
+    normal = anyPerpendicular(d2);
+  else
+    normal = Eigen::Vector3d::UnitZ();
+  // Intersecting: witnesses = closest points of the axes; else surface points.
+  const double k = surfaceFactor(distance);
+  point1 = q1 - (k * r1) * normal;
+  point2 = q2 + (k * r2) * normal;
+  return code;
+}
+
+/// Writes the error outputs of the deliverable signatures (NaN distance and points).
+inline int invalidOutputs(int code, double& distance, Eigen::Vector3d& point1, Eigen::Vector3d& point2)
+{
+  distance = kNaN;
+  point1 = Eigen::Vector3d::Constant(kNaN);
+  point2 = Eigen::Vector3d::Constant(kNaN);
+  return code;
 }
 
 /// min over t in [0,1] of G(t) = max_i(|a_i + t d_i| - h_i) (see capsuleBox), with its argmin.
@@ -138,45 +364,15 @@ const char* codeName(int code)
 
 int makeBox(const Eigen::Vector3d vertices[], double relative_tolerance, OrientedBox& box)
 {
-  double sum = 0.0;  // NaN / inf propagate
-  for (int i = 0; i < 8; ++i)
-    sum += vertices[i].sum();
-  if (!std::isfinite(sum))
+  if (!verticesFinite(vertices))
     return kInvalidInput;
   if (!(relative_tolerance >= 0.0) || !std::isfinite(relative_tolerance))
     return kInvalidInput;
-  const Eigen::Vector3d& v0 = vertices[0];
-  const Eigen::Vector3d ex = vertices[1] - v0;
-  const Eigen::Vector3d ey = vertices[4] - v0;
-  const Eigen::Vector3d ez = vertices[3] - v0;
-  const double lx2 = ex.squaredNorm(), ly2 = ey.squaredNorm(), lz2 = ez.squaredNorm();
-  const double diag2 = lx2 + ly2 + lz2;
-  if (!(diag2 > 0.0))
-    return kInvalidBox;
-  const double tol2 = relative_tolerance * relative_tolerance * diag2;
-  const double rt2 = relative_tolerance * relative_tolerance;
-  if (lx2 <= tol2 || ly2 <= tol2 || lz2 <= tol2)
-    return kInvalidBox;  // flat or degenerate
-  const double xy = ex.dot(ey), xz = ex.dot(ez), yz = ey.dot(ez);
-  if (xy * xy > rt2 * lx2 * ly2 || xz * xz > rt2 * lx2 * lz2 || yz * yz > rt2 * ly2 * lz2)
-    return kInvalidBox;  // not rectangular
-  if ((vertices[2] - v0 - ex - ez).squaredNorm() > tol2 || (vertices[5] - v0 - ex - ey).squaredNorm() > tol2 ||
-      (vertices[6] - v0 - ex - ey - ez).squaredNorm() > tol2 || (vertices[7] - v0 - ey - ez).squaredNorm() > tol2)
-    return kInvalidBox;  // wrong order or not a box
-  const double lx = std::sqrt(lx2), ly = std::sqrt(ly2), lz = std::sqrt(lz2);
-
-  // Orthonormal frame (Gram-Schmidt keeps x exact; the residual non-orthogonality is within
-  // the tolerance). The handedness of the vertex order is kept.
-  const Eigen::Vector3d x = ex / lx;
-  const Eigen::Vector3d y = (ey - ey.dot(x) * x).normalized();
-  Eigen::Vector3d z = x.cross(y);
-  if (z.dot(ez) < 0.0)
-    z = -z;
-  box.center = 0.5 * (v0 + vertices[6]);  // midpoint of the main diagonal
-  box.axes.col(0) = x;
-  box.axes.col(1) = y;
-  box.axes.col(2) = z;
-  box.half = Eigen::Vector3d(lx, ly, lz) * 0.5;
+  BoxEdges e;
+  const int code = validateBox(vertices, relative_tolerance * relative_tolerance, e);
+  if (code != kSeparated)
+    return code;
+  boxFrame(vertices, e, box);
   box.bounding_radius = box.half.norm();
   return kSeparated;
 }
@@ -197,101 +393,14 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
   vertices[7] = v0 + y + z;
 }
 
-// Segment-segment: minimise |p1 + s d1 - p3 - t d2|^2 over [0,1]^2 (convex quadratic).
-// Interior stationary point from the 2x2 normal equations (denominator |d1 x d2|^2, taken from
-// the cross product when nearly parallel to avoid cancellation), clamped; then t is
-// re-optimised for s and, if clamped, s for t.
-// Degenerate axes reduce to point-segment projections.
+// Segment-segment: see capsulePair().
 DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
                               const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2)
 {
-  if (!allFinite(p1, p2) || !allFinite(p3, p4) || !validRadius(r1) || !validRadius(r2))
-    return invalid(kInvalidInput);
-  const Eigen::Vector3d d1 = p2 - p1;
-  const Eigen::Vector3d d2 = p4 - p3;
-  const Eigen::Vector3d w = p1 - p3;
-  const double a = d1.squaredNorm();
-  const double e = d2.squaredNorm();
-  const double f = d2.dot(w);
-  double s = 0.0, t = 0.0;
-  bool parallel = false;
-  const bool point1 = a <= kDegenerateLength2;
-  const bool point2 = e <= kDegenerateLength2;
-  if (point1 && point2)
-  {
-    s = t = 0.0;
-  }
-  else if (point1)
-  {
-    t = clamp01(f / e);
-  }
-  else
-  {
-    const double c = d1.dot(w);
-    if (point2)
-    {
-      s = clamp01(-c / a);
-    }
-    else
-    {
-      const double b = d1.dot(d2);
-      // |d1 x d2|^2 = a e - b^2; near parallel the difference cancels, so it is then recomputed
-      // from the cross product (relative error of a e - b^2 ~ 1e-16 / 1e-3 otherwise).
-      double denom = a * e - b * b;
-      if (denom < 1e-3 * a * e)
-        denom = d1.cross(d2).squaredNorm();
-      if (denom > kParallelSin2 * a * e)
-      {
-        s = clamp01((b * f - c * e) / denom);
-      }
-      else
-      {
-        parallel = true;
-        s = 0.0;  // any s is optimal up to the clamping of t, fixed below
-      }
-      const double inv_a = 1.0 / a;  // independent of the chain above: overlaps with it
-      t = (b * s + f) / e;
-      if (t < 0.0)
-      {
-        t = 0.0;
-        s = clamp01(-c * inv_a);
-      }
-      else if (t > 1.0)
-      {
-        t = 1.0;
-        s = clamp01((b - c) * inv_a);
-      }
-    }
-  }
-  const Eigen::Vector3d q1 = p1 + s * d1;
-  const Eigen::Vector3d q2 = p3 + t * d2;
-  const Eigen::Vector3d v = q1 - q2;
-  const double axis = v.norm();
-
   DistanceResult out;
-  out.distance = axis - r1 - r2;
-  out.code = classify(out.distance, parallel);
-  if (axis > 0.0)
-    out.normal = v * (1.0 / axis);
-  else if (!point1 && !point2 && !parallel)
-    out.normal = d1.cross(d2).normalized();
-  else if (!point1)
-    out.normal = anyPerpendicular(d1);
-  else if (!point2)
-    out.normal = anyPerpendicular(d2);
-  else
-    out.normal = Eigen::Vector3d::UnitZ();
-
-  if (out.code == kIntersecting)
-  {
-    out.point1 = q1;  // witnesses: closest points of the axes
-    out.point2 = q2;
-  }
-  else
-  {
-    out.point1 = q1 - r1 * out.normal;
-    out.point2 = q2 + r2 * out.normal;
-  }
+  out.code = capsulePair(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal);
+  if (!capsulePairValid(out.distance, r1, r2))
+    return invalid(kInvalidInput);
   return out;
 }
 
@@ -305,10 +414,12 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
 // uses G(t) = max_i(|x_i(t)| - h_i), which equals the box's signed distance function where it
 // is <= 0; G is convex piecewise linear, so its minimum on [0,1] is at an end-point or at a
 // crossing of two of its 6 linear pieces (kinks of |.| included).
-DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r, const OrientedBox& box)
+namespace
 {
-  if (!allFinite(p1, p2) || !validRadius(r))
-    return invalid(kInvalidInput);
+/// capsuleBox() without the input checks (inputs finite, r >= 0).
+DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
+                                 const OrientedBox& box)
+{
   const Eigen::Matrix3d& R = box.axes;
   const Eigen::Vector3d& h = box.half;
   const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
@@ -318,16 +429,18 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
     const Eigen::Vector3d q(clampTo(a[0], h[0]), clampTo(a[1], h[1]), clampTo(a[2], h[2]));
     const Eigen::Vector3d v = a - q;
     const double axis2 = v.squaredNorm();
-    if (axis2 > kTangentTolerance * kTangentTolerance)
+    // Centre outside the box (inside: the general path, whose depth walk reduces to the
+    // nearest face for d = 0).
+    if (axis2 > 0.0)
     {
       const double axis = std::sqrt(axis2);
       DistanceResult out;
       out.distance = axis - r;
-      out.code = classify(out.distance, false);
+      out.code = classify(out.distance);
       const Eigen::Vector3d v_world = R * v;
       out.normal = v_world * (1.0 / axis);
       out.point2 = p1 - v_world;
-      out.point1 = out.code == kIntersecting ? p1 : Eigen::Vector3d(p1 - r * out.normal);
+      out.point1 = p1 - (surfaceFactor(out.distance) * r) * out.normal;
       return out;
     }
   }
@@ -403,12 +516,12 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   if (axis > kTangentTolerance || (axis > 0.0 && minimumDepth(a, d, h, t) >= 0.0))
   {
     out.distance = axis - r;
-    out.code = classify(out.distance, false);
+    out.code = classify(out.distance);
     const Eigen::Vector3d v_world = R * v;  // axis point - box point, world
     out.normal = v_world * (1.0 / axis);
     const Eigen::Vector3d axis_point = p1 + t * (p2 - p1);
     out.point2 = axis_point - v_world;
-    out.point1 = out.code == kIntersecting ? axis_point : Eigen::Vector3d(axis_point - r * out.normal);
+    out.point1 = axis_point - (surfaceFactor(out.distance) * r) * out.normal;
     return out;
   }
 
@@ -418,7 +531,7 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   x = a + best_t * d;
   const Eigen::Vector3d axis_point = p1 + best_t * (p2 - p1);
   out.distance = std::min(best, 0.0) - r;
-  out.code = classify(out.distance, false);
+  out.code = classify(out.distance);
   int face = 0;
   double face_g = std::abs(x[0]) - h[0];
   for (int i = 1; i < 3; ++i)
@@ -447,35 +560,107 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   return out;
 }
 
+}  // namespace
+
+DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r, const OrientedBox& box)
+{
+  if (!allFinite(p1, p2) || !validRadius(r))
+    return invalid(kInvalidInput);
+  return capsuleBoxChecked(p1, p2, r, box);
+}
+
 int dist_capsule_to_capsule(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2, const Eigen::Vector3d& P3,
                             const Eigen::Vector3d& P4, double r1, double r2, double& distance,
                             Eigen::Vector3d& point_on_capsule1, Eigen::Vector3d& point_on_capsule2)
 {
-  const DistanceResult res = capsuleCapsule(P1, P2, r1, P3, P4, r2);
-  distance = res.distance;
-  point_on_capsule1 = res.point1;
-  point_on_capsule2 = res.point2;
-  return res.code;
+  // Inputs are checked after the computation (see capsulePairValid), off the critical path.
+  Eigen::Vector3d normal;
+  const int code = capsulePair(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal);
+  if (!capsulePairValid(distance, r1, r2))
+    return invalidOutputs(kInvalidInput, distance, point_on_capsule1, point_on_capsule2);
+  return code;
 }
 
+// The box is validated (branch-free fast path) and its frame built on every call; the query is
+// then capsuleBox(). Prebuild an OrientedBox with makeBox() for repeated queries.
 int dist_capsule_to_parallelepiped(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                                    const Eigen::Vector3d vertices[], double r, double& distance,
                                    Eigen::Vector3d& point_on_capsule, Eigen::Vector3d& point_on_parall)
 {
+  if (vertices == nullptr || !allFinite(p1, p2) || !validRadius(r))
+    return invalidOutputs(kInvalidInput, distance, point_on_capsule, point_on_parall);
+  BoxEdges e;
+  const int valid = validateBox(vertices, kBoxRelativeTolerance * kBoxRelativeTolerance, e);
+  if (valid != kSeparated)
+    return invalidOutputs(valid, distance, point_on_capsule, point_on_parall);
   OrientedBox box;
-  const int built = vertices == nullptr ? kInvalidInput : makeBox(vertices, kBoxRelativeTolerance, box);
-  DistanceResult res = built == kSeparated ? capsuleBox(p1, p2, r, box) : invalid(built);
+  boxFrame(vertices, e, box);
+  const DistanceResult res = capsuleBoxChecked(p1, p2, r, box);
   distance = res.distance;
   point_on_capsule = res.point1;
   point_on_parall = res.point2;
   return res.code;
 }
 
+// Sphere-box directly in the (validated) vertex frame, without building an orthonormal frame:
+// with e_i the edge vectors from v0 and u_i = (s - v0).e_i, the centre's coordinates along the
+// edges are u_i / |e_i|^2 in [0, 1] inside the box; the closest box point clamps u_i to
+// [0, |e_i|^2] (Ericson 5.1.4), and s minus it is sum_i (u_i - clamp(u_i)) / |e_i|^2 e_i.
+// Only a centre inside the box needs the edge lengths (depth to the nearest face).
 int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
                                   double& distance, Eigen::Vector3d& point_on_sphere,
                                   Eigen::Vector3d& point_on_parall)
 {
-  return dist_capsule_to_parallelepiped(s, s, vertices, r, distance, point_on_sphere, point_on_parall);
+  if (vertices == nullptr || !std::isfinite(s.sum() + r) || !(r >= 0.0))
+    return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
+  BoxEdges e;
+  const int valid = validateBox(vertices, kBoxRelativeTolerance * kBoxRelativeTolerance, e);
+  if (valid != kSeparated)
+    return invalidOutputs(valid, distance, point_on_sphere, point_on_parall);
+  const Eigen::Vector3d w = s - vertices[0];
+  const double ux = w.dot(e.ex), uy = w.dot(e.ey), uz = w.dot(e.ez);
+  const double cx = minD(maxD(ux, 0.0), e.lx2);
+  const double cy = minD(maxD(uy, 0.0), e.ly2);
+  const double cz = minD(maxD(uz, 0.0), e.lz2);
+  // Centre minus closest box point, world [m]. The reciprocals depend only on the edges, so
+  // they are ready before the projections (off the dependency chain).
+  const double ix = 1.0 / e.lx2, iy = 1.0 / e.ly2, iz = 1.0 / e.lz2;
+  const Eigen::Vector3d off = ((ux - cx) * ix) * e.ex + ((uy - cy) * iy) * e.ey + ((uz - cz) * iz) * e.ez;
+  const double axis2 = off.squaredNorm();
+  if (axis2 > kMinAxis2)  // centre outside the box (by more than 1e-100 m)
+  {
+    const double axis = std::sqrt(axis2);
+    const double dist = axis - r;
+    const double scale = surfaceFactor(dist) * r * (axis * (1.0 / axis2));  // division overlaps the sqrt
+    distance = dist;
+    point_on_parall = s - off;
+    point_on_sphere = s - scale * off;
+    return classify(dist);
+  }
+  // Centre inside (or on the surface): depth to the nearest face, min_i min(u_i, l_i^2 - u_i) / l_i.
+  const double l2[3] = { e.lx2, e.ly2, e.lz2 };
+  const double u[3] = { ux, uy, uz };
+  const Eigen::Vector3d* edge[3] = { &e.ex, &e.ey, &e.ez };
+  int face = 0;
+  double depth = std::numeric_limits<double>::infinity(), sign = 1.0, length = 1.0;
+  for (int i = 0; i < 3; ++i)
+  {
+    const double l = std::sqrt(l2[i]);
+    const double high = l2[i] - u[i];  // towards the face at v0 + e_i
+    const double di = std::min(u[i], high) / l;
+    if (di < depth)
+    {
+      depth = di;
+      face = i;
+      sign = high <= u[i] ? 1.0 : -1.0;
+      length = l;
+    }
+  }
+  distance = -depth - r;
+  const Eigen::Vector3d normal = *edge[face] * (sign / length);
+  point_on_sphere = s;
+  point_on_parall = s + ((1.0 - surfaceFactor(distance)) * depth) * normal;  // tangent: s
+  return classify(distance);
 }
 
 }  // namespace saras_collision

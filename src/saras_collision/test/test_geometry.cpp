@@ -718,6 +718,211 @@ TEST(SphereBox, RandomAgainstFclAndReference)
   EXPECT_GT(intersecting, kRandomCases / 50);
 }
 
+// ===================================================================== fast-path regressions
+// The deliverable-signature functions validate their inputs on branch-free fast paths
+// (capsule-capsule: the finiteness check is done on the result; boxes: one combined test that
+// is false on NaN). These tests pin that every bad input still gets its distinct error code.
+namespace
+{
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+bool allNaN(double d, const Vector3d& a, const Vector3d& b)
+{
+  return std::isnan(d) && a.array().isNaN().all() && b.array().isNaN().all();
+}
+}  // namespace
+
+TEST(CapsuleCapsule, EveryNonFiniteInputIsRejected)
+{
+  // Configurations reaching every path: crossing, parallel, both / one degenerate axis.
+  const Vector3d configs[][4] = {
+    { Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0, -1, 1), Vector3d(0, 1, 1) },
+    { Vector3d(0, 0, 0), Vector3d(1, 0, 0), Vector3d(0.5, 1, 0), Vector3d(1.5, 1, 0) },
+    { Vector3d(0, 0, 0), Vector3d(0, 0, 0), Vector3d(3, 4, 0), Vector3d(3, 4, 0) },
+    { Vector3d(0.3, 0, 2), Vector3d(0.3, 0, 2), Vector3d(-1, 0, 0), Vector3d(1, 0, 0) },
+    { Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0.3, 0, 2), Vector3d(0.3, 0, 2) },
+    { Vector3d(-1, 0, 0), Vector3d(1, 0, 0), Vector3d(0, -1, 0), Vector3d(0, 1, 0) },  // axes meet
+  };
+  int checked = 0;
+  for (const auto& c : configs)
+  {
+    double d;
+    Vector3d a, b;
+    ASSERT_TRUE(saras_collision::isValidCode(
+        saras_collision::dist_capsule_to_capsule(c[0], c[1], c[2], c[3], 0.1, 0.2, d, a, b)));
+    for (int k = 0; k < 12; ++k)
+    {
+      for (double bad : { kNaN, kInf, -kInf })
+      {
+        Vector3d p[4] = { c[0], c[1], c[2], c[3] };
+        p[k / 3][k % 3] = bad;
+        d = 0.0;
+        EXPECT_EQ(saras_collision::dist_capsule_to_capsule(p[0], p[1], p[2], p[3], 0.1, 0.2, d, a, b),
+                  saras_collision::kInvalidInput)
+            << "coordinate " << k << " = " << bad;
+        EXPECT_TRUE(allNaN(d, a, b)) << k;
+        const saras_collision::DistanceResult res = saras_collision::capsuleCapsule(p[0], p[1], 0.1, p[2], p[3], 0.2);
+        EXPECT_EQ(res.code, saras_collision::kInvalidInput) << k;
+        EXPECT_TRUE(std::isnan(res.distance)) << k;
+        ++checked;
+      }
+    }
+    for (double bad : { kNaN, kInf, -kInf, -1e-12 })
+    {
+      EXPECT_EQ(saras_collision::dist_capsule_to_capsule(c[0], c[1], c[2], c[3], bad, 0.2, d, a, b),
+                saras_collision::kInvalidInput)
+          << bad;
+      EXPECT_TRUE(allNaN(d, a, b));
+      EXPECT_EQ(saras_collision::dist_capsule_to_capsule(c[0], c[1], c[2], c[3], 0.1, bad, d, a, b),
+                saras_collision::kInvalidInput)
+          << bad;
+      EXPECT_EQ(saras_collision::capsuleCapsule(c[0], c[1], bad, c[2], c[3], 0.2).code,
+                saras_collision::kInvalidInput);
+    }
+  }
+  EXPECT_EQ(checked, 6 * 12 * 3);
+}
+
+TEST(Box, FastValidationRejectsEveryBadVertexWithItsCode)
+{
+  Random rnd;
+  rnd.gen.seed(4242);
+  const OrientedBox box = rnd.box();
+  Vector3d v[8];
+  saras_collision::boxVertices(box, v);
+  const double diag = 2.0 * box.half.norm();
+  const Vector3d s = box.center + Vector3d(0.05, 0.01, -0.02), s2 = s + Vector3d(0.0, 0.03, 0.01);
+  double d;
+  Vector3d a, b;
+  auto sphere = [&](const Vector3d w[8]) { return saras_collision::dist_sphere_to_parallelepiped(s, w, 0.001, d, a, b); };
+  auto capsule = [&](const Vector3d w[8]) {
+    return saras_collision::dist_capsule_to_parallelepiped(s, s2, w, 0.001, d, a, b);
+  };
+  ASSERT_EQ(sphere(v), saras_collision::kSeparated);
+  ASSERT_EQ(capsule(v), saras_collision::kSeparated);
+  int checked = 0;
+  for (int i = 0; i < 8; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      Vector3d w[8];
+      for (double bad : { kNaN, kInf, -kInf })
+      {
+        std::copy(v, v + 8, w);
+        w[i][j] = bad;
+        EXPECT_EQ(sphere(w), saras_collision::kInvalidInput) << "vertex " << i << " coordinate " << j << " " << bad;
+        EXPECT_TRUE(allNaN(d, a, b));
+        EXPECT_EQ(capsule(w), saras_collision::kInvalidInput) << i << " " << j << " " << bad;
+        EXPECT_TRUE(allNaN(d, a, b));
+        OrientedBox out;
+        EXPECT_EQ(saras_collision::makeBox(w, 1e-6, out), saras_collision::kInvalidInput) << i << " " << j;
+      }
+      // Outside the tolerance (1e-6 of the diagonal): not a box.
+      std::copy(v, v + 8, w);
+      w[i][j] += 2e-6 * diag;
+      EXPECT_EQ(sphere(w), saras_collision::kInvalidBox) << "vertex " << i << " coordinate " << j;
+      EXPECT_TRUE(allNaN(d, a, b));
+      EXPECT_EQ(capsule(w), saras_collision::kInvalidBox) << i << " " << j;
+      // Within it: accepted (relative to the shortest edge: moving v0, v1, v3 or v4 also
+      // turns edges, and the angle tolerance is relative to the edge lengths).
+      std::copy(v, v + 8, w);
+      w[i][j] += 0.3e-6 * 2.0 * box.half.minCoeff();
+      EXPECT_EQ(sphere(w), saras_collision::kSeparated) << "vertex " << i << " coordinate " << j;
+      EXPECT_EQ(capsule(w), saras_collision::kSeparated) << i << " " << j;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 24);
+  // Every exchange of two vertices breaks the documented order.
+  for (int i = 0; i < 8; ++i)
+  {
+    for (int j = i + 1; j < 8; ++j)
+    {
+      Vector3d w[8];
+      std::copy(v, v + 8, w);
+      std::swap(w[i], w[j]);
+      EXPECT_EQ(sphere(w), saras_collision::kInvalidBox) << i << " <-> " << j;
+      EXPECT_EQ(capsule(w), saras_collision::kInvalidBox) << i << " <-> " << j;
+    }
+  }
+  // Degenerate boxes: a point, a segment, a flat rectangle.
+  Vector3d point[8], segment[8], flat[8];
+  aabbVertices(Vector3d(1, 1, 1), Vector3d(1, 1, 1), point);
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 0, 0), segment);
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1, 1, 0), flat);
+  for (const Vector3d* w : { point, segment, flat })
+  {
+    EXPECT_EQ(sphere(w), saras_collision::kInvalidBox);
+    EXPECT_EQ(capsule(w), saras_collision::kInvalidBox);
+  }
+  // Non-rectangular: y edge sheared by 2e-6 rad is rejected, by 0.3e-6 rad accepted.
+  for (double angle : { 2e-6, 0.3e-6 })
+  {
+    Vector3d w[8];
+    std::copy(v, v + 8, w);
+    const Vector3d shift = (v[1] - v[0]) * (angle * (v[4] - v[0]).norm() / (v[1] - v[0]).norm());
+    for (int i : { 4, 5, 6, 7 })
+      w[i] += shift;
+    const int expected = angle > 1e-6 ? saras_collision::kInvalidBox : saras_collision::kSeparated;
+    EXPECT_EQ(sphere(w), expected) << angle;
+    EXPECT_EQ(capsule(w), expected) << angle;
+  }
+  // Huge but finite coordinates overflow the squares: an invalid box, not a crash or a number.
+  Vector3d huge[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(1e200, 1e200, 1e200), huge);
+  EXPECT_EQ(sphere(huge), saras_collision::kInvalidBox);
+  EXPECT_TRUE(allNaN(d, a, b));
+  // Non-finite sphere / capsule inputs.
+  for (double bad : { kNaN, kInf, -kInf })
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      Vector3d t = s;
+      t[j] = bad;
+      EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(t, v, 0.001, d, a, b), saras_collision::kInvalidInput);
+      EXPECT_TRUE(allNaN(d, a, b));
+      EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(s, t, v, 0.001, d, a, b),
+                saras_collision::kInvalidInput);
+      EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(t, s, v, 0.001, d, a, b),
+                saras_collision::kInvalidInput);
+    }
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s, v, bad, d, a, b), saras_collision::kInvalidInput);
+    EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(s, s2, v, bad, d, a, b), saras_collision::kInvalidInput);
+  }
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s, v, -1e-12, d, a, b), saras_collision::kInvalidInput);
+}
+
+TEST(SphereBox, VertexFramePathEqualsPrebuiltBoxPath)
+{
+  // dist_sphere_to_parallelepiped works in the vertex frame (no orthonormal frame);
+  // capsuleBox(p, p) on makeBox() uses the orthonormal one: same codes, distances and points.
+  Random rnd;
+  rnd.gen.seed(99);
+  int inside = 0;
+  for (int k = 0; k < 5000; ++k)
+  {
+    const OrientedBox box = rnd.box();
+    Vector3d v[8];
+    saras_collision::boxVertices(box, v);
+    const Vector3d p = k % 5 == 0 ? Vector3d(box.center + box.axes * box.half.cwiseProduct(rnd.point(1.0))) :
+                                    rnd.point(0.08);
+    const double r = k % 7 == 0 ? 0.0 : rnd.uniform(0.0, 0.01);
+    double d;
+    Vector3d a, b;
+    const int code = saras_collision::dist_sphere_to_parallelepiped(p, v, r, d, a, b);
+    OrientedBox built;
+    ASSERT_EQ(saras_collision::makeBox(v, 1e-6, built), saras_collision::kSeparated);
+    const saras_collision::DistanceResult ref = saras_collision::capsuleBox(p, p, r, built);
+    ASSERT_EQ(code, ref.code) << k;
+    ASSERT_NEAR(d, ref.distance, 1e-15) << k;
+    ASSERT_NEAR((a - ref.point1).norm(), 0.0, 1e-15) << k;
+    ASSERT_NEAR((b - ref.point2).norm(), 0.0, 1e-15) << k;
+    ASSERT_NEAR(d, pointBoxSigned(p, box) - r, 1e-15) << k;
+    inside += pointBoxSigned(p, box) < 0.0;
+  }
+  EXPECT_GT(inside, 500);
+}
+
 int main(int argc, char** argv)
 {
   testing::InitGoogleTest(&argc, argv);

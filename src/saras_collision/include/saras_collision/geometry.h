@@ -84,8 +84,10 @@ struct OrientedBox
 /**
  * @brief Build an OrientedBox from 8 vertices in the documented order.
  * @param vertices array of 8 vertices [m]
- * @param relative_tolerance allowed deviation from a perfect box, relative to the diagonal
- *        (vertex positions) and as |cos| between edges
+ * @param relative_tolerance allowed deviation rt from a perfect box: every edge longer than
+ *        rt x diagonal; root-sum-square of the cosines of the 3 edge pairs <= rt; root-sum-square
+ *        of the 4 vertex residuals (v2 - v3 - x, v5 - v4 - x, v6 - v5 - z, v7 - v4 - z)
+ *        <= rt x diagonal
  * @param[out] box the box (unchanged on error)
  * @return kSeparated (1) on success, kInvalidInput on non-finite coordinates, kInvalidBox
  *         when the vertices are not a rectangular box in the documented order
