@@ -108,6 +108,24 @@ class CameraModel(object):
         uv, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), self.K, self.D)
         return uv.reshape(-1, 2)
 
+    def distort(self, xy):
+        """Raw-image pixels (N, 2) of normalised coordinates (N, 2) (x/z, y/z): the OpenCV
+        plumb_bob / rational_polynomial model, as cv2.projectPoints (fx, fy, cx, cy; no skew).
+        Vectorised numpy (cv2.projectPoints has a high per-call cost for a few points)."""
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        D = np.zeros(8)
+        n = min(len(self.D), 8)
+        D[:n] = self.D[:n]
+        if len(self.D) > 8 and np.any(self.D[8:] != 0):
+            return self.project(np.column_stack([xy, np.ones(len(xy))]))
+        k1, k2, p1, p2, k3, k4, k5, k6 = D
+        x, y = xy[:, 0], xy[:, 1]
+        r2 = x * x + y * y
+        radial = (1 + r2 * (k1 + r2 * (k2 + r2 * k3))) / (1 + r2 * (k4 + r2 * (k5 + r2 * k6)))
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        return np.column_stack([self.K[0, 0] * xd + self.K[0, 2], self.K[1, 1] * yd + self.K[1, 2]])
+
     def pixel_rays(self, step=1):
         """(h, w, 3) float32 rays (x, y, 1) in the optical frame through pixel centres.
 
@@ -244,6 +262,18 @@ def clip_polygon(poly, xmax, ymax):
     return np.array(out).reshape(-1, 2)
 
 
+#: corner sign table of an oriented box: row b = signs of axes (0, 1, 2) from the bits of b
+_BOX_CORNER_SIGNS = np.array([[1.0 if (b >> i) & 1 else -1.0 for i in range(3)] for b in range(8)])
+#: corner indices of face (axis i, sign), ordered around the face: (-,-), (+,-), (+,+), (-,+) in
+#: the two other axes (i + 1) % 3, (i + 2) % 3
+_BOX_FACES = {(i, sg): [sum(((1 if bits[a] > 0 else 0) << a) for a in range(3))
+                        for bits in [{i: sg, (i + 1) % 3: u, (i + 2) % 3: v}
+                                     for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1))]]
+              for i in range(3) for sg in (-1.0, 1.0)}
+#: edge sampling fractions for projected outlines
+_EDGE_SAMPLES = np.linspace(0.0, 1.0, 9)[:-1]
+
+
 class PlanarTarget(object):
     """A printed calibration board: grayscale texture on the board plane (z = 0 of its frame).
 
@@ -337,17 +367,41 @@ class SceneRenderer(object):
 
     def __init__(self, camera, surface, boxes=(), target=None, texture_size=1024,
                  texture_extent=0.30, light_distance=0.10, tissue_iterations=6,
-                 tissue_subsample=4):
+                 tissue_subsample=4, tissue_colour_subsample=2):
         self.cam = camera
         self.surface = surface
         self.rays = camera.pixel_rays()
         self.ray_norm = np.linalg.norm(self.rays, axis=2)
-        self.rays_lo = camera.pixel_rays(int(tissue_subsample))
+        # contiguous per-component copies for the per-face passes (float32)
+        self.rays_x = np.ascontiguousarray(self.rays[..., 0])
+        self.rays_y = np.ascontiguousarray(self.rays[..., 1])
+        self.inv_ray_norm = (1.0 / self.ray_norm).astype(np.float32)
+        tissue_subsample = int(tissue_subsample)
+        tissue_colour_subsample = int(tissue_colour_subsample)
+        if tissue_subsample < 1 or tissue_colour_subsample < 1 or \
+                tissue_subsample % tissue_colour_subsample:
+            raise ValueError('tissue_subsample must be a positive multiple of '
+                             'tissue_colour_subsample (>= 1)')
+        self.rays_lo = camera.pixel_rays(tissue_subsample)
+        self.rays_lo_norm = np.linalg.norm(self.rays_lo, axis=2).astype(np.float32)
+        # coarse-to-fine tissue solve: iterations on a 2x coarser grid, then refine_iterations
+        # here (None: everything on rays_lo, for small images)
+        lo_h, lo_w = self.rays_lo.shape[:2]
+        self.rays_c = camera.pixel_rays(2 * tissue_subsample) \
+            if (lo_w % 2 == 0 and lo_h % 2 == 0 and lo_w >= 160) else None
+        self.refine_iterations = 3
+        # Tissue colour (texture x shading) is sampled on a grid tissue_colour_subsample times
+        # coarser than the image (the texture is magnified ~2x at the working distance anyway)
+        # and upsampled: same pixel-centre convention as cv2.resize, so features stay in place.
+        self.colour_step = tissue_colour_subsample
+        self.colour_size = (camera.width // tissue_colour_subsample,
+                            camera.height // tissue_colour_subsample)
         self.fov = camera.field_of_view_bounds()
         self.iterations = int(tissue_iterations)
         self.light_distance = float(light_distance)
         # Precomputed tissue maps over a square of side texture_extent centred on the surface centre.
         self.tex = tissue_texture(texture_size)
+        self.tex4 = cv2.cvtColor(self.tex, cv2.COLOR_BGR2BGRA)   # 4 channels: faster remap
         self.tex_res = float(texture_extent) / texture_size
         self.tex_x0 = surface.cx - texture_extent / 2.0
         self.tex_y0 = surface.cy - texture_extent / 2.0
@@ -362,6 +416,8 @@ class SceneRenderer(object):
         self._cache_pose = None
         self._cache = None
         self.background_renders = 0
+        self._bone_bgr = (190.0, 215.0, 230.0, 0.0)   # bone colour (BGR) at shade 1
+        self._Tcw = None                               # camera <- world of the frame being drawn
 
     def set_boxes(self, boxes):
         """Replace the bone boxes (list of (8, 3) vertex arrays in world [m])."""
@@ -374,16 +430,33 @@ class SceneRenderer(object):
         self._cache_pose = None
 
     # -- static layer ---------------------------------------------------------------------
-    def _tex_coords(self, x, y):
-        return ((x - self.tex_x0) / self.tex_res - 0.5).astype(np.float32), \
-               ((y - self.tex_y0) / self.tex_res - 0.5).astype(np.float32)
+    def _coarse_tissue_depth(self, R, o):
+        """Tissue ray depth solved on a grid twice coarser than ``tissue_subsample`` (all
+        fixed-point iterations there), upsampled to the tissue grid as its starting point;
+        misses (rays not pointing down) start from the mean plane."""
+        d = (self.rays_c.reshape(-1, 3) @ R.T).reshape(self.rays_c.shape)
+        dz = d[..., 2]
+        kz = np.float32(1.0) / np.where(dz < -1e-6, dz, np.float32(-1.0))
+        bx = d[..., 0] * np.float32(1.0 / self.tex_res)
+        by = d[..., 1] * np.float32(1.0 / self.tex_res)
+        ax = np.float32((o[0] - self.tex_x0) / self.tex_res - 0.5)
+        ay = np.float32((o[1] - self.tex_y0) / self.tex_res - 0.5)
+        t = (np.float32(self.surface.z0) - o[2]) * kz
+        for _ in range(self.iterations):
+            hh = cv2.remap(self.hmap, t * bx + ax, t * by + ay, cv2.INTER_LINEAR,
+                           borderMode=cv2.BORDER_REPLICATE)
+            t = (hh - o[2]) * kz
+        h, w = self.rays_lo.shape[:2]
+        return cv2.resize(t, (w, h), interpolation=cv2.INTER_LINEAR)
 
     def render_background(self, T_world_cam):
         """(image BGR uint8 (H, W, 3), depth along optical z [m] float32 (H, W), inf = nothing).
 
         The tissue geometry (ray/height-field intersection, texture coordinates, shading) is
         smooth, so it is solved on a grid ``tissue_subsample`` times coarser and interpolated;
-        the texture itself, bones and calibration targets are sampled at every pixel centre.
+        its colour (texture x shading) is sampled ``tissue_colour_subsample`` times coarser and
+        upsampled. Bones and calibration targets are resolved at every pixel centre (exact
+        per-pixel depth, sharp outlines).
         """
         R = T_world_cam[:3, :3].astype(np.float32)
         o = T_world_cam[:3, 3].astype(np.float32)
@@ -391,35 +464,66 @@ class SceneRenderer(object):
         h, w = self.rays_lo.shape[:2]
         d = (self.rays_lo.reshape(-1, 3) @ R.T).reshape(h, w, 3)
         dx, dy, dz = d[..., 0], d[..., 1], d[..., 2]
-        # Tissue: fixed-point iteration t <- (h(o + t d) - o_z) / d_z on rays pointing down.
+        # Tissue: fixed-point iteration t <- (h(o + t d) - o_z) / d_z on rays pointing down,
+        # with the texture coordinates (texels) of o + t d affine in t: m = a + t b.
         down = dz < -1e-6
-        dzs = np.where(down, dz, np.float32(-1.0))
-        t = (np.float32(self.surface.z0) - o[2]) / dzs
-        for _ in range(self.iterations):
-            mx, my = self._tex_coords(o[0] + t * dx, o[1] + t * dy)
+        kz = np.float32(1.0) / np.where(down, dz, np.float32(-1.0))
+        inv_res = np.float32(1.0 / self.tex_res)
+        ax = np.float32((o[0] - self.tex_x0) / self.tex_res - 0.5)
+        ay = np.float32((o[1] - self.tex_y0) / self.tex_res - 0.5)
+        bx, by = dx * inv_res, dy * inv_res
+        t = self._coarse_tissue_depth(R, o) if self.rays_c is not None else None
+        if t is None:   # from the mean plane, all iterations on this grid
+            t = (np.float32(self.surface.z0) - o[2]) * kz
+            iterations = self.iterations
+        else:           # coarse solution upsampled, refined here
+            iterations = self.refine_iterations
+        mx, my = np.empty_like(t), np.empty_like(t)
+        for it in range(iterations + 1):
+            np.multiply(t, bx, out=mx)
+            mx += ax
+            np.multiply(t, by, out=my)
+            my += ay
+            if it == iterations:
+                break
             hh = cv2.remap(self.hmap, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-            t = (hh - o[2]) / dzs
-        hit = (down & (t > 0)).astype(np.float32)
-        mx, my = self._tex_coords(o[0] + t * dx, o[1] + t * dy)
+            np.subtract(hh, o[2], out=t)
+            t *= kz
+        hit = down & (t > 0)
         nrm = cv2.remap(self.nmap, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        dn = np.sqrt(dx * dx + dy * dy + dz * dz)
+        dn = self.rays_lo_norm   # |R d| = |d|
         lam = np.clip(-(nrm[..., 0] * dx + nrm[..., 1] * dy + nrm[..., 2] * dz) / dn, 0.0, 1.0)
-        fall = np.clip((self.light_distance / np.maximum(t * dn, 1e-3)) ** 1.5, 0.3, 1.3)
-        shade = ((0.15 + 0.85 * lam) * fall * hit).astype(np.float32)
-        up = (W, H)
-        mx = cv2.resize(mx, up, interpolation=cv2.INTER_LINEAR)
-        my = cv2.resize(my, up, interpolation=cv2.INTER_LINEAR)
-        shade = cv2.resize(shade, up, interpolation=cv2.INTER_LINEAR)
-        tfull = cv2.resize(np.where(hit > 0, t, np.float32(0)), up, interpolation=cv2.INTER_LINEAR)
-        hitf = cv2.resize(hit, up, interpolation=cv2.INTER_LINEAR) > 0.999
-        col = cv2.remap(self.tex, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
-        # uint8 all the way: shade in 1/128 steps (saturating), texture * shade / 128.
-        shade8 = cv2.cvtColor(cv2.convertScaleAbs(shade, alpha=128.0), cv2.COLOR_GRAY2BGR)
-        img = cv2.multiply(col, shade8, scale=1.0 / 128.0)
-        depth = np.where(hitf, tfull, np.float32(np.inf)).astype(np.float32)
-        # Bone boxes: exact ray/box slab test on the pixels of their projected bounding rectangle.
-        for centre, axes, half in self.boxes:
-            self._render_box(img, depth, T_world_cam, R, o, centre, axes, half)
+        x = np.float32(self.light_distance) / np.maximum(t * dn, np.float32(1e-3))
+        fall = np.clip(x * np.sqrt(x), 0.3, 1.3)   # (L / distance)^1.5
+        # colour layer: texture coordinates + shading (x128, uint8 fixed point) upsampled to the
+        # colour grid, texture sampled there, shaded, then upsampled to the image.
+        lo = np.empty((h, w, 2), np.float32)
+        lo[..., 0], lo[..., 1] = mx, my
+        maps = cv2.resize(lo, self.colour_size, interpolation=cv2.INTER_LINEAR)
+        shade = cv2.resize(np.where(hit, (0.15 + 0.85 * lam) * fall * np.float32(128.0),
+                                    np.float32(0.0)).astype(np.float32),
+                           self.colour_size, interpolation=cv2.INTER_LINEAR)
+        col = cv2.remap(self.tex4, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        shade = cv2.cvtColor(cv2.convertScaleAbs(shade), cv2.COLOR_GRAY2BGRA)
+        col = cv2.cvtColor(cv2.multiply(col, shade, scale=1.0 / 128.0), cv2.COLOR_BGRA2BGR)
+        if self.colour_size != (W, H):
+            img = cv2.resize(col, (W, H), interpolation=cv2.INTER_LINEAR)
+        else:
+            img = col
+        # depth: inf where the ray misses the tissue; upsampling marks every pixel that has a
+        # missing neighbour on the coarse grid as a miss (inf, or NaN from inf - inf => patched).
+        t = np.where(hit, t, np.float32(np.inf))
+        depth = cv2.resize(t, (W, H), interpolation=cv2.INTER_LINEAR)
+        cv2.patchNaNs(depth, np.inf)
+        # Bone boxes: camera-facing faces filled with exact per-pixel depth, z-tested on the
+        # inverse depth (0 = nothing), which is linear in the normalised ray coordinates.
+        if self.boxes:
+            self._Tcw = rigid.invert(T_world_cam)
+            idepth = np.divide(np.float32(1.0), depth)
+            for centre, axes, half in self.boxes:
+                self._render_box(img, idepth, T_world_cam, R, o, centre, axes, half)
+            with np.errstate(divide='ignore'):
+                depth = np.divide(np.float32(1.0), idepth)
         if self.target is not None:
             self._render_target(img, depth, T_world_cam, R, o)
         return img, depth
@@ -459,73 +563,91 @@ class SceneRenderer(object):
             return None
         return x0, y0, x1, y1
 
-    def _render_box(self, img, depth, T_world_cam, R, o, centre, axes, half):
-        """Box by its camera-facing faces: each face, clipped to z >= 1 mm and to the field of
-        view, has its outline (edges sampled through the distortion model) filled; every covered
-        pixel's ray is intersected with the face plane (exact depth, per-pixel Lambert shading)
-        and z-tested against the depth buffer."""
-        Tcw = rigid.invert(T_world_cam)
+    def _render_box(self, img, idepth, T_world_cam, R, o, centre, axes, half):
+        """Box by its camera-facing faces (slab test on the pixels they cover).
+
+        Each front face, clipped to z >= 1 mm and to the field of view, has its outline (edges
+        sampled through the distortion model) filled with its flat colour (Lambert x head-light
+        fall-off at the centroid of its visible part); front faces of a convex box cover
+        disjoint image regions. A ray that hits a convex box crosses every front-face plane from
+        outside, and enters through the one it meets last, so the box's inverse depth at a
+        covered pixel is the smallest front-face plane inverse depth, exact per pixel and linear
+        in the normalised ray coordinates (x, y): 1/t = (n . (x, y, 1)) / k. It is z-tested
+        against ``idepth`` (inverse optical depth, 0 = nothing) and written where closer."""
+        Tcw = self._Tcw
         o64 = o.astype(np.float64)
-        fxb, fyb = self.fov
+        fxb, fyb = 1.03 * self.fov[0], 1.03 * self.fov[1]
         H, W = self.cam.height, self.cam.width
-        s = np.linspace(0.0, 1.0, 9)[:-1]  # edge samples (distorted images bend straight edges)
-        jobs = []
+        near = 1e-3
+        # the 8 corners (bit i of the index = sign of axis i) in the camera frame
+        signs = _BOX_CORNER_SIGNS
+        corners = centre + (signs * half) @ axes
+        pc = corners @ Tcw[:3, :3].T + Tcw[:3, 3]
+        z = pc[:, 2]
+        if np.all(z < near):
+            return
+        if np.all(z >= near):   # whole box outside one side of the view frustum: nothing to draw
+            xz, yz = pc[:, 0] / z, pc[:, 1] / z
+            if np.all(xz > fxb) or np.all(xz < -fxb) or np.all(yz > fyb) or np.all(yz < -fyb):
+                return
+        Rt = R.T.astype(np.float64)
+        faces, polys = [], []
         for i in range(3):
-            j, k = (i + 1) % 3, (i + 2) % 3
             for sign in (-1.0, 1.0):
                 n = sign * axes[i]
                 fc = centre + sign * half[i] * axes[i]
                 if np.dot(n, o64 - fc) <= 0.0:
                     continue  # back face
-                quad = np.array([fc + a * half[j] * axes[j] + b * half[k] * axes[k]
-                                 for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
-                qc = clip_polygon_near(quad @ Tcw[:3, :3].T + Tcw[:3, 3], 1e-3)
-                if len(qc) < 3:
-                    continue
+                qc = pc[_BOX_FACES[(i, sign)]]
+                if np.any(qc[:, 2] < near):
+                    qc = clip_polygon_near(qc, near)
+                    if len(qc) < 3:
+                        continue
                 # Straight lines stay straight on the normalised plane: clip there to the field
                 # of view, then sample the outline through the distortion model.
-                poly = clip_polygon(qc[:, :2] / qc[:, 2:3], 1.03 * fxb, 1.03 * fyb)
-                if len(poly) < 3:
-                    continue
-                m = len(poly)
-                pts = np.concatenate([poly[e] + s[:, None] * (poly[(e + 1) % m] - poly[e])
-                                      for e in range(m)])
-                jobs.append((n, fc, axes[j], half[j], axes[k], half[k],
-                             self.cam.project(np.column_stack([pts, np.ones(len(pts))]))))
-        bone = np.array([190, 215, 230], np.float32)
-        for n, fc, aj, hj, ak, hk, uv in jobs:
-            x0, y0 = np.maximum(np.floor(uv.min(axis=0)).astype(int) - 1, 0)
-            x1, y1 = np.minimum(np.ceil(uv.max(axis=0)).astype(int) + 2, [W, H])
-            if x0 >= x1 or y0 >= y1:
-                continue
-            mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
-            poly = np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)
-            cv2.fillPoly(mask, [poly], 255, cv2.LINE_8, 4)
-            # conservative candidate set; the exact in-face test below decides edge pixels
-            cand = cv2.dilate(mask, np.ones((3, 3), np.uint8)) > 0
-            # Dense over the face's rectangle, in the camera frame (ray = (x, y, 1), t = depth).
-            Rt = R.T.astype(np.float64)
-            nc, ajc, akc = Rt @ n, Rt @ aj, Rt @ ak
-            rel = Rt @ (o64 - fc)
-            rx, ry = self.rays[y0:y1, x0:x1, 0], self.rays[y0:y1, x0:x1, 1]
-            nd = rx * np.float32(nc[0]) + ry * np.float32(nc[1]) + np.float32(nc[2])
-            with np.errstate(divide='ignore', invalid='ignore'):
-                t = np.float32(-np.dot(nc, rel)) / nd
-            dsub = depth[y0:y1, x0:x1]
-            ok = cand & (nd < 0) & (t > 0) & (t < dsub)
-            u = np.float32(rel @ ajc) + t * (rx * np.float32(ajc[0]) + ry * np.float32(ajc[1]) +
-                                             np.float32(ajc[2]))
-            v = np.float32(rel @ akc) + t * (rx * np.float32(akc[0]) + ry * np.float32(akc[1]) +
-                                             np.float32(akc[2]))
-            ok &= (np.abs(u) <= hj * (1 + 1e-5)) & (np.abs(v) <= hk * (1 + 1e-5))
-            if not np.any(ok):
-                continue
-            dn = self.ray_norm[y0:y1, x0:x1]
-            fall = np.clip((self.light_distance / np.maximum(t * dn, 1e-3)) ** 1.5, 0.3, 1.3)
-            shade = np.clip((0.25 + 0.75 * (-nd / dn)) * fall, 0.0, 1.3)
-            colour = cv2.merge([np.clip(c * shade, 0, 255).astype(np.uint8) for c in bone])
-            np.copyto(img[y0:y1, x0:x1], colour, where=ok[..., None])
-            np.copyto(dsub, t, where=ok)
+                poly = qc[:, :2] / qc[:, 2:3]
+                if np.any(np.abs(poly[:, 0]) > fxb) or np.any(np.abs(poly[:, 1]) > fyb):
+                    poly = clip_polygon(poly, fxb, fyb)
+                    if len(poly) < 3:
+                        continue
+                nc = Rt @ n
+                faces.append((nc, float(-np.dot(nc, Rt @ (o64 - fc))), qc.mean(axis=0)))
+                polys.append(poly)
+        if not faces:
+            return
+        # edges sampled 8 times (distorted images bend straight edges), one distortion call
+        pts = np.concatenate([(p[:, None, :] + _EDGE_SAMPLES[None, :, None] *
+                               (np.roll(p, -1, axis=0) - p)[:, None, :]).reshape(-1, 2) for p in polys])
+        uv_flat = self.cam.distort(pts)
+        if not np.all(np.isfinite(uv_flat)):
+            return
+        bounds = np.cumsum([0] + [8 * len(p) for p in polys])
+        faces = [(uv_flat[bounds[f]:bounds[f + 1]],) + faces[f] for f in range(len(faces))]
+        if not faces:
+            return
+        uv_all = np.concatenate([f[0] for f in faces])
+        x0, y0 = np.maximum(np.floor(uv_all.min(axis=0)).astype(int) - 1, 0)
+        x1, y1 = np.minimum(np.ceil(uv_all.max(axis=0)).astype(int) + 2, [W, H])
+        if x0 >= x1 or y0 >= y1:
+            return
+        colour = np.zeros((y1 - y0, x1 - x0, 3), np.uint8)
+        rx, ry = self.rays_x[y0:y1, x0:x1], self.rays_y[y0:y1, x0:x1]
+        smin = None
+        for uv, nc, kk, cen in faces:
+            dist = max(np.linalg.norm(cen), 1e-3)
+            fall = min(max((self.light_distance / dist) ** 1.5, 0.3), 1.3)
+            shade = min((0.25 + 0.75 * max(-np.dot(nc, cen) / dist, 0.0)) * fall, 1.3)
+            cv2.fillPoly(colour, [np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)],
+                         tuple(max(1.0, min(255.0, c * shade)) for c in self._bone_bgr[:3]),
+                         cv2.LINE_8, 4)
+            # inverse depth of the face plane along ray (x, y, 1): (n . ray) / kk
+            sf = cv2.addWeighted(rx, float(nc[0] / kk), ry, float(nc[1] / kk), float(nc[2] / kk))
+            smin = sf if smin is None else np.minimum(smin, sf, out=smin)
+        isub = idepth[y0:y1, x0:x1]
+        ok = cv2.bitwise_and(cv2.compare(colour[..., 0], 0, cv2.CMP_GT),
+                             cv2.compare(smin, isub, cv2.CMP_GT))
+        cv2.copyTo(colour, ok, img[y0:y1, x0:x1])
+        cv2.copyTo(smin, ok, isub)
 
     def _render_target(self, img, depth, T_world_cam, R, o):
         tgt, T_wb = self.target

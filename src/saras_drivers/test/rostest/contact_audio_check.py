@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""rostest: contact_sim depth/direction against the tissue model for a tip driven through TF
+"""rostest: contact_sim depth/direction against the tissue model for a tip driven through its
+ee_pose topic (base frame from /tf_static)
 (in contact, out of contact), depth 0 for a tool without pose; microphone chunk format."""
 import sys
 import unittest
@@ -8,7 +9,7 @@ import numpy as np
 import rospy
 import rostest
 import tf2_ros
-from geometry_msgs.msg import TransformStamped
+from geometry_msgs.msg import PoseStamped, TransformStamped
 
 from saras_drivers.tissue_surface import TissueSurface
 from saras_msgs.msg import AudioChunk, ComponentStatus, Contact
@@ -16,7 +17,7 @@ from saras_msgs.msg import AudioChunk, ComponentStatus, Contact
 
 class ContactAudioTest(unittest.TestCase):
     def setUp(self):
-        self.br = tf2_ros.TransformBroadcaster()
+        self.pose_pub = rospy.Publisher('/mesa_left/ee_pose', PoseStamped, queue_size=10)
         self.static = tf2_ros.StaticTransformBroadcaster()
         m = TransformStamped()
         m.header.stamp = rospy.Time.now()
@@ -27,12 +28,15 @@ class ContactAudioTest(unittest.TestCase):
         self.surf = TissueSurface.from_config(rospy.get_param('~tissue'))
 
     def send_tip(self, p):
-        m = TransformStamped()
+        """Tool tip at world point p, sent as saras_arms_state does: ee_pose in sbs_world."""
+        R_wb = np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]], float)   # Rz(-pi/2)
+        pb = R_wb.T @ (np.asarray(p, float) - [0.0, 0.45, 0.0])
+        m = PoseStamped()
         m.header.stamp = rospy.Time.now()
-        m.header.frame_id, m.child_frame_id = 'world', 'mesa_left/tool_tip'
-        m.transform.translation.x, m.transform.translation.y, m.transform.translation.z = p
-        m.transform.rotation.w = 1.0
-        self.br.sendTransform(m)
+        m.header.frame_id = 'mesa_left/sbs_world'
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = pb
+        m.pose.orientation.w = 1.0
+        self.pose_pub.publish(m)
 
     def contact_for(self, p, n=10):
         got = []
