@@ -21,18 +21,28 @@ def ident(name):
 def main(out_path):
     master = rosgraph.masterapi.Master('/node_graph')
     pubs, subs, _ = master.getSystemState()
+    # nodelet managers: '<manager>/bond' connects a manager with its loader nodes (one per nodelet);
+    # the nodelets' topics are registered under the manager, so the loaders are drawn inside it
+    members = {}
+    for topic, ns in list(pubs) + list(subs):
+        if topic.endswith('/bond'):
+            members.setdefault(topic[:-len('/bond')], set()).update(ns)
+    groups = {m: sorted(ns - {m}) for m, ns in members.items() if m in ns}
     edges = {}
+    internal = {}
     sub_map = {t: [n for n in ns if not n.startswith(IGNORED_NODES)] for t, ns in subs}
     nodes = set()
     for topic, publishers in pubs:
         nodes.update(p for p in publishers if not p.startswith(IGNORED_NODES))
-        if topic in IGNORED_TOPICS:
+        if topic in IGNORED_TOPICS or topic.endswith('/bond'):
             continue
         for p in publishers:
             if p.startswith(IGNORED_NODES):
                 continue
             nodes.add(p)
             for s in sub_map.get(topic, []):
+                if s == p and p in groups:
+                    internal.setdefault(p, []).append(topic)
                 if s != p:
                     nodes.add(s)
                     edges.setdefault((p, s), []).append(topic)
@@ -42,13 +52,26 @@ def main(out_path):
     lines = ['# Platform node graph', '',
              'Captured from the running simulated platform (`make demo`, scripts/node_graph.py).',
              'Edges are topics; `/tf`, `/tf_static`, the `/saras/status` heartbeats and /rosout are omitted',
-             '(every node uses TF; see docs/interfaces.md for frames).', '',
+             '(every node uses TF; see docs/interfaces.md for frames). A nodelet manager is drawn as a box',
+             'holding its nodelets (their loader node names); its topics, including the zero-copy',
+             'intra-process ones (self edge), are registered under the manager.', '',
              '```mermaid', 'flowchart LR']
-    for n in sorted(nodes):
+    grouped = set()
+    for m, loaders in sorted(groups.items()):
+        lines.append('  subgraph %s_group["%s (nodelet manager)"]' % (ident(m), m))
+        for n in [m] + loaders:
+            lines.append('    %s["%s"]' % (ident(n), n))
+            grouped.add(n)
+        lines.append('  end')
+    for n in sorted(nodes - grouped):
         lines.append('  %s["%s"]' % (ident(n), n))
     for (p, s), topics in sorted(edges.items()):
         label = '<br/>'.join(sorted(topics)[:4]) + ('<br/>+%d more' % (len(topics) - 4) if len(topics) > 4 else '')
         lines.append('  %s -->|"%s"| %s' % (ident(p), label, ident(s)))
+    for m, topics in sorted(internal.items()):
+        topics = sorted(set(topics))
+        label = '<br/>'.join(topics[:4]) + ('<br/>+%d more' % (len(topics) - 4) if len(topics) > 4 else '')
+        lines.append('  %s -->|"intra-process: %s"| %s' % (ident(m), label, ident(m)))
     lines.append('```')
     lines.append('')
     lines.append('Nodes: %d, publisher→subscriber pairs: %d.' % (len(nodes), len(edges)))
