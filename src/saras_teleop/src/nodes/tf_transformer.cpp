@@ -15,6 +15,7 @@
  * wait_timeout [s], stale_timeout [s], wrench_timeout [s], max_force [N], max_torque [N m].
  */
 #include <cmath>
+#include <set>
 #include <string>
 
 #include <geometry_msgs/PoseStamped.h>
@@ -45,6 +46,25 @@ public:
     reference_ = paramString(pnh, "reference_frame", "mesa_left/sbs_world");
     tracked_ = paramString(pnh, "tracked_frame", "touch_left/stylus");
     device_base_ = paramString(pnh, "device_base_frame", "touch_left/base");
+    // Dynamic (/tf) transforms kept in the buffer: the tracked frame plus ~extra_dynamic_frames (list
+    // of child frame ids, default none: the Touchball receiver publishes the stylus directly under the
+    // static device base). Everything else on /tf (the SARAS arms' and the da Vinci's links, several
+    // thousand transforms/s) cannot be on the chain and is skipped without touching the buffer.
+    dynamic_frames_.insert(tracked_);
+    if (pnh.hasParam("extra_dynamic_frames"))
+    {
+      std::vector<std::string> extra;
+      if (!pnh.getParam("extra_dynamic_frames", extra))
+        throw std::invalid_argument("parameter '" + pnh.resolveName("extra_dynamic_frames") +
+                                    "' must be a list of frame ids");
+      for (const auto& f : extra)
+      {
+        if (f.empty())
+          throw std::invalid_argument("parameter '" + pnh.resolveName("extra_dynamic_frames") +
+                                      "' must not contain empty frame ids");
+        dynamic_frames_.insert(f);
+      }
+    }
     const double rate = paramPositive(pnh, "rate", 1000.0);
     period_ = 1.0 / rate;
     wait_timeout_ = paramPositive(pnh, "wait_timeout", 10.0);
@@ -77,6 +97,8 @@ private:
   {
     for (const auto& t : m.transforms)
     {
+      if (!is_static && dynamic_frames_.find(t.child_frame_id) == dynamic_frames_.end())
+        continue;  // not on the device_base -> tracked chain (see dynamic_frames_)
       const auto& tr = t.transform.translation;
       const auto& rq = t.transform.rotation;
       // checked here so that a NaN stream gives one throttled error instead of tf2's unthrottled one
@@ -268,6 +290,7 @@ private:
   std::unique_ptr<MessagePool<geometry_msgs::WrenchStamped>> wrench_pool_;
   ros::Publisher pose_pub_, twist_pub_, wrench_pub_;
   ros::Subscriber tf_sub_, tf_static_sub_, wrench_sub_;
+  std::set<std::string> dynamic_frames_;  ///< child frames taken from /tf (the rest is skipped)
   ros::SteadyTimer timer_;
   ros::Time start_, last_sample_wall_, t_wrench_, t_wrench_pub_;
   uint64_t received_ = 0, rejected_ = 0;
