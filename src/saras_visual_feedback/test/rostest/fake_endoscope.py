@@ -70,21 +70,7 @@ class FakeEndoscope:
     def publish_images(self):
         stamp = rospy.Time.now()
         for e, eye in enumerate(('left', 'right')):
-            info = CameraInfo()
-            info.header.stamp = stamp
-            info.header.frame_id = 'endoscope/%s_optical_frame' % eye
-            info.width, info.height = scene.WIDTH, scene.HEIGHT
-            info.distortion_model = 'plumb_bob'
-            info.D = scene.D
-            info.K = scene.K
-            info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
-            info.P = [scene.K[0], 0, scene.K[2], 0, 0, scene.K[4], scene.K[5], 0, 0, 0, 1, 0]
-            img = Image()
-            img.header = info.header
-            img.width, img.height = scene.WIDTH, scene.HEIGHT
-            img.encoding = 'bgr8'
-            img.step = 3 * scene.WIDTH
-            img.data = self.data[e]
+            info, img = scene.eye_messages(eye, stamp, self.data[e])
             if self.bad_input and self.count % 5 == 2:
                 img.data = self.data[e][:100]  # truncated buffer: must be rejected, not crash
             if self.bad_input and self.count % 7 == 3:

@@ -98,21 +98,7 @@ class FastTool:
     def _images(self, _event):
         stamp = rospy.Time.now() - self.image_delay
         for e, eye in enumerate(('left', 'right')):
-            info = CameraInfo()
-            info.header.stamp = stamp
-            info.header.frame_id = 'endoscope/%s_optical_frame' % eye
-            info.width, info.height = scene.WIDTH, scene.HEIGHT
-            info.distortion_model = 'plumb_bob'
-            info.D = scene.D
-            info.K = scene.K
-            info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
-            info.P = [scene.K[0], 0, scene.K[2], 0, 0, scene.K[4], scene.K[5], 0, 0, 0, 1, 0]
-            img = Image()
-            img.header = info.header
-            img.width, img.height = scene.WIDTH, scene.HEIGHT
-            img.encoding = 'bgr8'
-            img.step = 3 * scene.WIDTH
-            img.data = self.black
+            info, img = scene.eye_messages(eye, stamp, self.black)
             self.info_pubs[e].publish(info)
             self.image_pubs[e].publish(img)
 

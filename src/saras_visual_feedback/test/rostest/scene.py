@@ -67,3 +67,24 @@ def quaternion(r, p, y):
     cy, sy = math.cos(y / 2), math.sin(y / 2)
     return (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
             cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+
+
+def eye_messages(eye, stamp, data):
+    """(CameraInfo, Image) of one eye ('left'/'right') of the test camera: K, plumb_bob D, bgr8 ``data``."""
+    from sensor_msgs.msg import CameraInfo, Image  # pylint: disable=import-outside-toplevel
+    info = CameraInfo()
+    info.header.stamp = stamp
+    info.header.frame_id = 'endoscope/%s_optical_frame' % eye
+    info.width, info.height = WIDTH, HEIGHT
+    info.distortion_model = 'plumb_bob'
+    info.D = D
+    info.K = K
+    info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
+    info.P = [K[0], 0, K[2], 0, 0, K[4], K[5], 0, 0, 0, 1, 0]
+    img = Image()
+    img.header = info.header
+    img.width, img.height = WIDTH, HEIGHT
+    img.encoding = 'bgr8'
+    img.step = 3 * WIDTH
+    img.data = data
+    return info, img
