@@ -9,45 +9,12 @@ Supported joint types: ``revolute``, ``continuous``, ``prismatic`` (one axis) an
 ``mimic`` joints follow ``multiplier * q + offset``. Units: m, rad. Quaternions [x, y, z, w].
 """
 
-import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
+from saras_description.transforms import axis_angle, matrix_to_quat, rpy_to_matrix, trans
 
 MOVING = ('revolute', 'continuous', 'prismatic')
-
-
-def rpy_to_matrix(r, p, y):
-    """URDF fixed-axis roll-pitch-yaw: R = Rz(y) Ry(p) Rx(r)."""
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
-
-
-def axis_angle_to_matrix(axis, angle):
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k.dot(k)
-
-
-def matrix_to_quaternion(r):
-    """Rotation matrix -> unit quaternion [x, y, z, w] (w >= 0), numerically robust branch."""
-    t = r[0, 0] + r[1, 1] + r[2, 2]
-    if t > 0.0:
-        s = 2.0 * math.sqrt(t + 1.0)
-        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
-    if q[3] < 0.0:
-        q = [-x for x in q]
-    return q
 
 
 class Joint(object):
@@ -63,11 +30,7 @@ class Joint(object):
         """parent -> child [4x4] at joint position q [rad or m]."""
         if self.type == 'fixed':
             return self.origin
-        m = np.eye(4)
-        if self.type == 'prismatic':
-            m[:3, 3] = self.axis * q
-        else:
-            m[:3, :3] = axis_angle_to_matrix(self.axis, q)
+        m = trans(*(self.axis * q)) if self.type == 'prismatic' else axis_angle(self.axis, q)
         return self.origin.dot(m)
 
 
@@ -94,7 +57,7 @@ class UrdfTf(object):
             xyz = [float(x) for x in (o.get('xyz', '0 0 0') if o is not None else '0 0 0').split()]
             rpy = [float(x) for x in (o.get('rpy', '0 0 0') if o is not None else '0 0 0').split()]
             origin = np.eye(4)
-            origin[:3, :3] = rpy_to_matrix(*rpy)
+            origin[:3, :3] = rpy_to_matrix(rpy)
             origin[:3, 3] = xyz
             a = j.find('axis')
             axis = np.array([float(x) for x in (a.get('xyz') if a is not None else '1 0 0').split()])
@@ -133,13 +96,13 @@ class UrdfTf(object):
             c = self._cache[k]
             if c is None or c[0] != v:
                 t = j.transform(v)
-                c = (v, (j.parent, j.child, t[:3, 3], matrix_to_quaternion(t[:3, :3])))
+                c = (v, (j.parent, j.child, t[:3, 3], matrix_to_quat(t[:3, :3])))
                 self._cache[k] = c
             out.append(c[1])
         return out
 
     def fixed(self):
-        return [(j.parent, j.child, j.origin[:3, 3], matrix_to_quaternion(j.origin[:3, :3]))
+        return [(j.parent, j.child, j.origin[:3, 3], matrix_to_quat(j.origin[:3, :3]))
                 for j in self.joints if j.type == 'fixed']
 
     def chain(self, q, root, tip):
