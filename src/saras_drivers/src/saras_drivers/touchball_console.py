@@ -20,6 +20,7 @@ import csv
 import math
 
 from saras_drivers import touchball_protocol as tp
+from saras_drivers.touchball_link import quat_mul
 
 
 def quat_from_rpy(roll, pitch, yaw):
@@ -31,15 +32,6 @@ def quat_from_rpy(roll, pitch, yaw):
             cr * sp * cy + sr * cp * sy,
             cr * cp * sy - sr * sp * cy,
             cr * cp * cy + sr * sp * sy)
-
-
-def _quat_mul(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
 
 
 def _nlerp(a, b, s):
@@ -263,7 +255,7 @@ class ConsoleCalibration(object):
                        reference_orientation=(0.0, 0.0, 0.0, 1.0)):
         """Choose offsets so that the current raw pose reads as the reference pose."""
         inv = (-raw_orientation[0], -raw_orientation[1], -raw_orientation[2], raw_orientation[3])
-        self.orientation_offset = _quat_mul(reference_orientation, inv)
+        self.orientation_offset = quat_mul(reference_orientation, inv)
         self.position_offset = tuple(r - p for r, p in zip(reference_position, raw_position))
 
     def clip_angle(self, raw):
@@ -272,7 +264,7 @@ class ConsoleCalibration(object):
 
     def apply(self, position, orientation):
         p = tuple(a + b for a, b in zip(position, self.position_offset))
-        return p, _quat_mul(self.orientation_offset, orientation)
+        return p, quat_mul(self.orientation_offset, orientation)
 
 
 class TouchballConsole(object):
