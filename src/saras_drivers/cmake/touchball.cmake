@@ -1,0 +1,1 @@
+# Build rules of the C++ touchball component (owned by its engineer); included from CMakeLists.txt.
