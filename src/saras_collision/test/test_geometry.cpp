@@ -389,6 +389,48 @@ TEST(CapsuleCapsule, RandomAgainstFclAndReference)
   EXPECT_GT(intersecting, kRandomCases / 20);
 }
 
+// The general-case fast path (axes more than ~1.8 degrees from parallel: sin^2 > 1e-3) and the
+// careful path (cross-product denominator) meet at that angle: both sides of the switch, and
+// every clamping region of both parameters, must still be exact and never overstated.
+TEST(CapsuleCapsule, ExactOnBothSidesOfTheFastPathAngle)
+{
+  Random rnd;
+  int checked = 0;
+  for (int k = 0; k < 4000; ++k)
+  {
+    const Vector3d p1 = rnd.point(0.05);
+    const Vector3d d1 = rnd.point(1.0).normalized() * rnd.uniform(0.001, 0.12);
+    Vector3d axis = d1.cross(rnd.point(1.0));
+    if (axis.norm() < 1e-6)
+      continue;
+    axis.normalize();
+    const double angle = rnd.uniform(0.5, 1.5) * std::asin(std::sqrt(1e-3));  // switch at 1.0
+    const Vector3d d2 = (Eigen::AngleAxisd(angle, axis) * d1).normalized() * rnd.uniform(0.001, 0.12) *
+                        (k % 2 == 0 ? 1.0 : -1.0);
+    const Vector3d p3 = p1 + rnd.point(0.08), p4 = p3 + d2;
+    const Vector3d p2 = p1 + d1;
+    const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    double d;
+    Vector3d a, b;
+    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
+    const double ref = segmentSegmentRef(p1, p2, p3, p4) - r1 - r2;
+    ASSERT_TRUE(saras_collision::isValidCode(code)) << k;
+    ASSERT_NEAR(d, ref, 1e-12) << "case " << k;
+    ASSERT_LE(d, ref + 1e-12) << "overstated, case " << k;
+    if (code == saras_collision::kSeparated)
+    {
+      ASSERT_NEAR((a - b).norm(), d, 1e-12) << k;
+      ASSERT_NEAR(pointSegment(a, p1, p2), r1, 1e-12) << k;
+      ASSERT_NEAR(pointSegment(b, p3, p4), r2, 1e-12) << k;
+    }
+    const saras_collision::DistanceResult full = saras_collision::capsuleCapsule(p1, p2, r1, p3, p4, r2);
+    ASSERT_EQ(full.code, code) << k;
+    ASSERT_EQ(full.distance, d) << k;
+    ++checked;
+  }
+  EXPECT_GT(checked, 3900);
+}
+
 // ===================================================================== boxes
 TEST(Box, VertexOrderAndValidation)
 {
