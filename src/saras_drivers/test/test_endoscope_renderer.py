@@ -250,18 +250,23 @@ def test_distort_matches_opencv_projection():
 
 
 @pytest.mark.parametrize('q', [(0.0, 0.0, 0.09, 0.0), (0.2, -0.2, 0.05, 0.3), (-0.3, 0.2, 0.12, -0.3)])
-def test_tissue_depth_truth_at_720p_moving_camera(cams, q):
-    """Coarse-to-fine tissue solve (the moving-camera path) at the shipped 1280x720 camera from
-    ECM-like viewpoints: back-projected pixels lie on the analytic surface (texture area)."""
+@pytest.mark.parametrize('size', [(1280, 720), (1920, 1080)])
+def test_tissue_depth_truth_at_720p_and_1080p_moving_camera(cams, q, size):
+    """Coarse-to-fine tissue solve (the moving-camera path) at the shipped camera (1280x720, and
+    scaled to 1920x1080: coarser grid steps 6/3 px) from ECM-like viewpoints: back-projected
+    pixels lie on the analytic surface (texture area)."""
     surf = TissueSurface(z0=0.07)
-    cam = cams['left']
+    cam = cams['left'].scaled(*size)
     r = er.SceneRenderer(cam, surf)
     assert r.rays_c is not None        # the coarse grid is in use at this size
+    assert r.colour_step == er.tissue_grid_steps(size[0])[1] == size[0] // 640
     eye = np.array([0.14, 0.0, 0.24]) + np.array([-0.13 + q[0] * 0.1, q[1] * 0.1, -0.17]) * 0.55
     T_wc = look_at(eye, [0.0 + q[3] * 0.05, q[2] - 0.09, 0.07])
     _, depth = r.render_background(T_wc)
+    img2, none = r.render_background(T_wc, with_depth=False)
+    assert none is None and np.array_equal(img2, _)   # same image without the depth buffer
     rays = cam.pixel_rays()
-    v, u = np.mgrid[4:716:11, 4:1276:13]
+    v, u = np.mgrid[4:size[1] - 4:11 * size[1] // 720, 4:size[0] - 4:13 * size[0] // 1280]
     p = (rays[v, u] * depth[v, u][..., None]).reshape(-1, 3)
     ok = np.all(np.isfinite(p), axis=1)
     p = p[ok] @ T_wc[:3, :3].T + T_wc[:3, 3]
@@ -270,3 +275,34 @@ def test_tissue_depth_truth_at_720p_moving_camera(cams, q):
     err = np.abs(p[inside, 2] - surf.height(p[inside, 0], p[inside, 1]))
     # 0.15 mm (the single-grid solve of the previous release reached 0.47 mm at q[1])
     assert err.max() < 1.5e-4, err.max()
+
+
+@pytest.mark.parametrize('size', [(1280, 720), (1920, 1080)])
+def test_box_partly_buried_in_tissue_same_without_depth_buffer(cams, size):
+    """A bone box half under the tissue: the z-test against the tissue (upsampled only where the
+    box is when no depth buffer is wanted) hides the buried part, identically in both paths, and
+    the visible box pixels have the slab-test depth of the box."""
+    cam = cams['left'].scaled(*size)
+    surf = TissueSurface(z0=0.07)
+    box = np.array([[x, y, z] for x in (-0.02, 0.02) for y in (-0.015, 0.015) for z in (0.055, 0.075)])
+    r = er.SceneRenderer(cam, surf, boxes=[box])
+    T_wc = look_at(np.array([0.06, 0.0, 0.20]), [0.0, 0.0, 0.07])
+    img, depth = r.render_background(T_wc)
+    img2, none = r.render_background(T_wc, with_depth=False)
+    assert none is None and np.array_equal(img, img2)
+    slab = slab_depth(cam, T_wc, *er.box_from_vertices(box))
+    inside = np.isfinite(slab)
+    k = np.ones((5, 5), np.uint8)
+    inner = cv2.erode(inside.astype(np.uint8), k).astype(bool)
+    shows_box = inner & (np.abs(depth - slab) < 1e-4 * slab)
+    rays = cam.pixel_rays()
+    p = rays * depth[..., None]
+    p = p.reshape(-1, 3) @ T_wc[:3, :3].T + T_wc[:3, 3]
+    on_tissue = (np.abs(p[:, 2] - surf.height(p[:, 0], p[:, 1])) < 3e-4).reshape(depth.shape)
+    # both the box and the tissue covering its buried part are seen inside its silhouette
+    assert shows_box.sum() > 0.1 * inner.sum() and (inner & on_tissue).sum() > 0.1 * inner.sum()
+    # where the box is drawn it is in front of the tissue hit by the same ray (as the z-test says)
+    tissue_only = er.SceneRenderer(cam, surf)
+    _, dt = tissue_only.render_background(T_wc)
+    assert np.all(slab[shows_box] <= dt[shows_box] * (1 + 1e-4))
+    assert np.all(depth[inner] <= slab[inner] * (1 + 1e-4))

@@ -245,7 +245,7 @@ def clip_polygon_near(poly, near):
 
 def clip_polygon(poly, xmax, ymax):
     """Sutherland-Hodgman clip of a 2D polygon (N, 2) to the rectangle |x| <= xmax, |y| <= ymax."""
-    out = [np.asarray(p, float) for p in poly]
+    out = [(float(p[0]), float(p[1])) for p in poly]   # plain floats: few points, called per frame
     for axis, sign, lim in ((0, 1, xmax), (0, -1, xmax), (1, 1, ymax), (1, -1, ymax)):
         inp, out = out, []
         if not inp:
@@ -255,11 +255,11 @@ def clip_polygon(poly, xmax, ymax):
             cin, pin = sign * cur[axis] <= lim, sign * prev[axis] <= lim
             if cin != pin:
                 a = (lim - sign * prev[axis]) / (sign * (cur[axis] - prev[axis]))
-                out.append(prev + a * (cur - prev))
+                out.append((prev[0] + a * (cur[0] - prev[0]), prev[1] + a * (cur[1] - prev[1])))
             if cin:
                 out.append(cur)
             prev = cur
-    return np.array(out).reshape(-1, 2)
+    return np.array(out, dtype=float).reshape(-1, 2)
 
 
 #: corner sign table of an oriented box: row b = signs of axes (0, 1, 2) from the bits of b
@@ -270,6 +270,9 @@ _BOX_FACES = {(i, sg): [sum(((1 if bits[a] > 0 else 0) << a) for a in range(3))
                         for bits in [{i: sg, (i + 1) % 3: u, (i + 2) % 3: v}
                                      for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1))]]
               for i in range(3) for sg in (-1.0, 1.0)}
+#: the six faces as (axis, sign) and their corner indices (6, 4) for the vectorised box pass
+_FACE_KEYS = [(i, sg) for i in range(3) for sg in (-1.0, 1.0)]
+_FACE_IDX = np.array([_BOX_FACES[k] for k in _FACE_KEYS])
 #: edge sampling fractions for projected outlines
 _EDGE_SAMPLES = np.linspace(0.0, 1.0, 9)[:-1]
 
@@ -357,31 +360,46 @@ class PlanarTarget(object):
         return cls('circles', tex, res, x_min, y_min, pts, corners)
 
 
+def tissue_grid_steps(width):
+    """Default (tissue_subsample, tissue_colour_subsample) [px] for an image ``width`` px wide.
+
+    The tissue content has a fixed angular bandwidth (a 1024-texel texture over 0.30 m: one
+    texel is ~1.3 px of the 1280-px, 71-deg camera at the working distance), so its sampling
+    grids keep a fixed angular pitch: colour every 2 px at 1280 (and below), 3 px at 1920, ...;
+    geometry twice coarser. Bones, shafts and targets stay per pixel at every resolution."""
+    colour = max(2, int(round(2.0 * width / 1280.0)))
+    return 2 * colour, colour
+
+
 class SceneRenderer(object):
     """Renders raw (distorted) BGR images of the synthetic surgical scene for one camera.
 
     ``surface``: TissueSurface (world frame). ``boxes``: list of (8, 3) vertex arrays in world.
     ``target``: optional (PlanarTarget, T_world_board). The static layer (tissue, bones, target)
     is cached per camera pose; :meth:`render` adds the instrument shafts.
+    ``tissue_subsample`` / ``tissue_colour_subsample`` [px]: grid steps of the tissue geometry
+    and colour (None: :func:`tissue_grid_steps` of the image width).
     """
 
     def __init__(self, camera, surface, boxes=(), target=None, texture_size=1024,
                  texture_extent=0.30, light_distance=0.10, tissue_iterations=6,
-                 tissue_subsample=4, tissue_colour_subsample=2):
+                 tissue_subsample=None, tissue_colour_subsample=None):
         self.cam = camera
+        auto = tissue_grid_steps(camera.width)
+        tissue_subsample = auto[0] if tissue_subsample is None else tissue_subsample
+        tissue_colour_subsample = auto[1] if tissue_colour_subsample is None else tissue_colour_subsample
         self.surface = surface
         self.rays = camera.pixel_rays()
-        self.ray_norm = np.linalg.norm(self.rays, axis=2)
         # contiguous per-component copies for the per-face passes (float32)
         self.rays_x = np.ascontiguousarray(self.rays[..., 0])
         self.rays_y = np.ascontiguousarray(self.rays[..., 1])
-        self.inv_ray_norm = (1.0 / self.ray_norm).astype(np.float32)
         tissue_subsample = int(tissue_subsample)
         tissue_colour_subsample = int(tissue_colour_subsample)
         if tissue_subsample < 1 or tissue_colour_subsample < 1 or \
                 tissue_subsample % tissue_colour_subsample:
             raise ValueError('tissue_subsample must be a positive multiple of '
                              'tissue_colour_subsample (>= 1)')
+        self._tissue_step = tissue_subsample
         self.rays_lo = camera.pixel_rays(tissue_subsample)
         self.rays_lo_norm = np.linalg.norm(self.rays_lo, axis=2).astype(np.float32)
         # coarse-to-fine tissue solve: iterations on a 2x coarser grid, then refine_iterations
@@ -401,7 +419,11 @@ class SceneRenderer(object):
         self.light_distance = float(light_distance)
         # Precomputed tissue maps over a square of side texture_extent centred on the surface centre.
         self.tex = tissue_texture(texture_size)
-        self.tex4 = cv2.cvtColor(self.tex, cv2.COLOR_BGR2BGRA)   # 4 channels: faster remap
+        # the texture padded by half its size on each side with its own reflection (what
+        # BORDER_REFLECT samples there): ECM views reach ~0.5 texture sizes beyond the textured
+        # square, and cv2.remap is ~1.5x slower on samples outside its source image
+        self.tex_pad = texture_size // 2
+        self.tex_padded = cv2.copyMakeBorder(self.tex, *([self.tex_pad] * 4), cv2.BORDER_REFLECT)
         self.tex_res = float(texture_extent) / texture_size
         self.tex_x0 = surface.cx - texture_extent / 2.0
         self.tex_y0 = surface.cy - texture_extent / 2.0
@@ -410,18 +432,30 @@ class SceneRenderer(object):
         X, Y = np.meshgrid(g, gy)
         self.hmap = surface.height(X, Y).astype(np.float32)
         self.nmap = surface.normal(X, Y).astype(np.float32)
-        self.boxes = [box_from_vertices(b) for b in boxes]
+        self._scratch = None
+        self.set_boxes(boxes)
         self.target = None
         self.set_target(target)
         self._cache_pose = None
         self._cache = None
         self.background_renders = 0
         self._bone_bgr = (190.0, 215.0, 230.0, 0.0)   # bone colour (BGR) at shade 1
-        self._Tcw = None                               # camera <- world of the frame being drawn
 
     def set_boxes(self, boxes):
         """Replace the bone boxes (list of (8, 3) vertex arrays in world [m])."""
         self.boxes = [box_from_vertices(b) for b in boxes]
+        self._bx = None
+        if self.boxes:   # stacked for the vectorised pass: corners, face normals/centres/offsets
+            C = np.array([b[0] for b in self.boxes])
+            A = np.array([b[1] for b in self.boxes])
+            Hf = np.array([b[2] for b in self.boxes])
+            corners = C[:, None, :] + np.einsum('bkj,bji->bki', _BOX_CORNER_SIGNS[None] * Hf[:, None, :], A)
+            ax_i = np.array([i for i, _ in _FACE_KEYS])
+            sg = np.array([sg for _, sg in _FACE_KEYS])
+            normals = sg[None, :, None] * A[:, ax_i, :]                      # (nb, 6, 3)
+            centres = C[:, None, :] + (sg[None, :] * Hf[:, ax_i])[..., None] * A[:, ax_i, :]
+            self._bx = {'corners': corners, 'normals': normals, 'centres': centres,
+                        'offsets': np.einsum('bfj,bfj->bf', normals, centres)}
         self._cache_pose = None
 
     def set_target(self, target):
@@ -449,8 +483,11 @@ class SceneRenderer(object):
         h, w = self.rays_lo.shape[:2]
         return cv2.resize(t, (w, h), interpolation=cv2.INTER_LINEAR)
 
-    def render_background(self, T_world_cam):
+    def render_background(self, T_world_cam, with_depth=True):
         """(image BGR uint8 (H, W, 3), depth along optical z [m] float32 (H, W), inf = nothing).
+
+        ``with_depth`` False: depth is None (no full-resolution depth buffer is made; the bone
+        z-test upsamples the tissue depth only where the boxes are), unless a target is shown.
 
         The tissue geometry (ray/height-field intersection, texture coordinates, shading) is
         smooth, so it is solved on a grid ``tissue_subsample`` times coarser and interpolated;
@@ -498,14 +535,15 @@ class SceneRenderer(object):
         # colour layer: texture coordinates + shading (x128, uint8 fixed point) upsampled to the
         # colour grid, texture sampled there, shaded, then upsampled to the image.
         lo = np.empty((h, w, 2), np.float32)
-        lo[..., 0], lo[..., 1] = mx, my
+        np.add(mx, np.float32(self.tex_pad), out=lo[..., 0])
+        np.add(my, np.float32(self.tex_pad), out=lo[..., 1])
         maps = cv2.resize(lo, self.colour_size, interpolation=cv2.INTER_LINEAR)
         shade = cv2.resize(np.where(hit, (0.15 + 0.85 * lam) * fall * np.float32(128.0),
                                     np.float32(0.0)).astype(np.float32),
                            self.colour_size, interpolation=cv2.INTER_LINEAR)
-        col = cv2.remap(self.tex4, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
-        shade = cv2.cvtColor(cv2.convertScaleAbs(shade), cv2.COLOR_GRAY2BGRA)
-        col = cv2.cvtColor(cv2.multiply(col, shade, scale=1.0 / 128.0), cv2.COLOR_BGRA2BGR)
+        col = cv2.remap(self.tex_padded, maps, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        shade = cv2.cvtColor(cv2.convertScaleAbs(shade), cv2.COLOR_GRAY2BGR)
+        col = cv2.multiply(col, shade, scale=1.0 / 128.0)
         if self.colour_size != (W, H):
             img = cv2.resize(col, (W, H), interpolation=cv2.INTER_LINEAR)
         else:
@@ -513,17 +551,13 @@ class SceneRenderer(object):
         # depth: inf where the ray misses the tissue; upsampling marks every pixel that has a
         # missing neighbour on the coarse grid as a miss (inf, or NaN from inf - inf => patched).
         t = np.where(hit, t, np.float32(np.inf))
-        depth = cv2.resize(t, (W, H), interpolation=cv2.INTER_LINEAR)
-        cv2.patchNaNs(depth, np.inf)
+        depth = None
+        if with_depth or self.target is not None:
+            depth = cv2.resize(t, (W, H), interpolation=cv2.INTER_LINEAR)
+            cv2.patchNaNs(depth, np.inf)
         # Bone boxes: camera-facing faces filled with exact per-pixel depth, z-tested on the
         # inverse depth (0 = nothing), which is linear in the normalised ray coordinates.
-        if self.boxes:
-            self._Tcw = rigid.invert(T_world_cam)
-            idepth = np.divide(np.float32(1.0), depth)
-            for centre, axes, half in self.boxes:
-                self._render_box(img, idepth, T_world_cam, R, o, centre, axes, half)
-            with np.errstate(divide='ignore'):
-                depth = np.divide(np.float32(1.0), idepth)
+        self._render_boxes(img, depth, T_world_cam, t)
         if self.target is not None:
             self._render_target(img, depth, T_world_cam, R, o)
         return img, depth
@@ -563,8 +597,8 @@ class SceneRenderer(object):
             return None
         return x0, y0, x1, y1
 
-    def _render_box(self, img, idepth, T_world_cam, R, o, centre, axes, half):
-        """Box by its camera-facing faces (slab test on the pixels they cover).
+    def _render_boxes(self, img, depth, T_world_cam, tissue_lo):
+        """Bone boxes by their camera-facing faces, all boxes' geometry vectorised.
 
         Each front face, clipped to z >= 1 mm and to the field of view, has its outline (edges
         sampled through the distortion model) filled with its flat colour (Lambert x head-light
@@ -573,81 +607,154 @@ class SceneRenderer(object):
         outside, and enters through the one it meets last, so the box's inverse depth at a
         covered pixel is the smallest front-face plane inverse depth, exact per pixel and linear
         in the normalised ray coordinates (x, y): 1/t = (n . (x, y, 1)) / k. It is z-tested
-        against ``idepth`` (inverse optical depth, 0 = nothing) and written where closer."""
-        Tcw = self._Tcw
-        o64 = o.astype(np.float64)
+        against the inverse optical depth of what is already drawn (0 = nothing) and written
+        where closer; ``depth`` (None: not wanted) is updated in the rectangle the boxes cover.
+        ``tissue_lo``: tissue depth on the tissue grid (inf = miss), upsampled where needed."""
+        bx = self._bx
+        if bx is None:
+            return
+        Tcw = rigid.invert(T_world_cam)
+        Rcw, tcw = Tcw[:3, :3], Tcw[:3, 3]
+        o = np.asarray(T_world_cam[:3, 3], dtype=np.float64)
         fxb, fyb = 1.03 * self.fov[0], 1.03 * self.fov[1]
         H, W = self.cam.height, self.cam.width
         near = 1e-3
-        # the 8 corners (bit i of the index = sign of axis i) in the camera frame
-        signs = _BOX_CORNER_SIGNS
-        corners = centre + (signs * half) @ axes
-        pc = corners @ Tcw[:3, :3].T + Tcw[:3, 3]
-        z = pc[:, 2]
-        if np.all(z < near):
+        pc = bx['corners'] @ Rcw.T + tcw                      # (nb, 8, 3) camera frame
+        z = pc[..., 2]
+        ahead = z >= near
+        with np.errstate(divide='ignore', invalid='ignore'):
+            xz, yz = pc[..., 0] / z, pc[..., 1] / z
+        outside = ahead.all(1) & ((xz > fxb).all(1) | (xz < -fxb).all(1) |
+                                  (yz > fyb).all(1) | (yz < -fyb).all(1))
+        sel = (ahead.any(1) & ~outside)[:, None] & \
+            (bx['normals'] @ o - bx['offsets'] > 0.0)           # (nb, 6) visible front faces
+        if not sel.any():
             return
-        if np.all(z >= near):   # whole box outside one side of the view frustum: nothing to draw
-            xz, yz = pc[:, 0] / z, pc[:, 1] / z
-            if np.all(xz > fxb) or np.all(xz < -fxb) or np.all(yz > fyb) or np.all(yz < -fyb):
-                return
-        Rt = R.T.astype(np.float64)
-        faces, polys = [], []
-        for i in range(3):
-            for sign in (-1.0, 1.0):
-                n = sign * axes[i]
-                fc = centre + sign * half[i] * axes[i]
-                if np.dot(n, o64 - fc) <= 0.0:
-                    continue  # back face
-                qc = pc[_BOX_FACES[(i, sign)]]
-                if np.any(qc[:, 2] < near):
-                    qc = clip_polygon_near(qc, near)
-                    if len(qc) < 3:
-                        continue
-                # Straight lines stay straight on the normalised plane: clip there to the field
-                # of view, then sample the outline through the distortion model.
-                poly = qc[:, :2] / qc[:, 2:3]
-                if np.any(np.abs(poly[:, 0]) > fxb) or np.any(np.abs(poly[:, 1]) > fyb):
-                    poly = clip_polygon(poly, fxb, fyb)
-                    if len(poly) < 3:
-                        continue
-                nc = Rt @ n
-                faces.append((nc, float(-np.dot(nc, Rt @ (o64 - fc))), qc.mean(axis=0)))
-                polys.append(poly)
+        Q = pc[:, _FACE_IDX]                                  # (nb, 6, 4, 3)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            P = Q[..., :2] / Q[..., 2:3]                      # normalised outlines
+        clip_near = (Q[..., 2] < near).any(-1)
+        clip_fov = clip_near | (np.abs(P[..., 0]) > fxb).any(-1) | (np.abs(P[..., 1]) > fyb).any(-1)
+        nc = bx['normals'] @ Rcw.T                            # (nb, 6, 3) face normals, camera
+        kk = np.einsum('bfj,bfj->bf', nc, bx['centres'] @ Rcw.T + tcw)   # plane n . X = kk
+        cen = Q.mean(axis=2)                                  # centroid of the visible part
+        # faces: (box, face, outline (n, 2) normalised)
+        simple = sel & ~clip_fov
+        faces = [(b, f, None) for b, f in zip(*np.nonzero(simple))]
+        for b, f in zip(*np.nonzero(sel & clip_fov)):
+            qc = Q[b, f]
+            if clip_near[b, f]:
+                qc = clip_polygon_near(qc, near)
+                if len(qc) < 3:
+                    continue
+                cen[b, f] = qc.mean(axis=0)
+            poly = qc[:, :2] / qc[:, 2:3]
+            poly = clip_polygon(poly, fxb, fyb)
+            if len(poly) >= 3:
+                faces.append((b, f, poly))
         if not faces:
             return
+        faces.sort(key=lambda fc: (fc[0], fc[1]))   # drawing order of a box's faces: axis, sign
         # edges sampled 8 times (distorted images bend straight edges), one distortion call
-        pts = np.concatenate([(p[:, None, :] + _EDGE_SAMPLES[None, :, None] *
-                               (np.roll(p, -1, axis=0) - p)[:, None, :]).reshape(-1, 2) for p in polys])
+        polys = [P[b, f] if poly is None else poly for b, f, poly in faces]
+        counts = [len(p) for p in polys]
+        allp = np.concatenate(polys)
+        nxt = np.concatenate([np.roll(p, -1, axis=0) for p in polys])
+        pts = (allp[:, None, :] + _EDGE_SAMPLES[None, :, None] * (nxt - allp)[:, None, :]).reshape(-1, 2)
         uv_flat = self.cam.distort(pts)
-        if not np.all(np.isfinite(uv_flat)):
+        bounds = np.cumsum([0] + [8 * c for c in counts])
+        fb = np.array([b for b, _, _ in faces])
+        ff = np.array([f for _, f, _ in faces])
+        # flat shading per face: Lambert at the centroid x head-light fall-off
+        c = cen[fb, ff]
+        dist = np.maximum(np.linalg.norm(c, axis=1), 1e-3)
+        fall = np.clip((self.light_distance / dist) ** 1.5, 0.3, 1.3)
+        lam = np.maximum(-np.einsum('fj,fj->f', nc[fb, ff], c) / dist, 0.0)
+        shade = np.minimum((0.25 + 0.75 * lam) * fall, 1.3)
+        colours = np.clip(np.outer(shade, self._bone_bgr[:3]), 1.0, 255.0)
+        planes = nc[fb, ff] / kk[fb, ff][:, None]             # inverse depth = planes . (x, y, 1)
+        # per face and per box: pixel rectangles
+        per_box = {}
+        for i, b in enumerate(fb):
+            uv = uv_flat[bounds[i]:bounds[i + 1]]
+            if np.all(np.isfinite(uv)):
+                fr = (np.floor(uv.min(axis=0)).astype(int) - 2, np.ceil(uv.max(axis=0)).astype(int) + 3)
+                per_box.setdefault(b, []).append((uv, i, fr))
+        rects = []
+        for b, fl in per_box.items():
+            x0, y0 = np.maximum(np.min([fr[0] for _, _, fr in fl], axis=0) + 1, 0)
+            x1, y1 = np.minimum(np.max([fr[1] for _, _, fr in fl], axis=0) - 1, [W, H])
+            if x0 < x1 and y0 < y1:
+                rects.append((x0, y0, x1, y1, fl))
+        if not rects:
             return
-        bounds = np.cumsum([0] + [8 * len(p) for p in polys])
-        faces = [(uv_flat[bounds[f]:bounds[f + 1]],) + faces[f] for f in range(len(faces))]
-        if not faces:
-            return
-        uv_all = np.concatenate([f[0] for f in faces])
-        x0, y0 = np.maximum(np.floor(uv_all.min(axis=0)).astype(int) - 1, 0)
-        x1, y1 = np.minimum(np.ceil(uv_all.max(axis=0)).astype(int) + 2, [W, H])
-        if x0 >= x1 or y0 >= y1:
-            return
-        colour = np.zeros((y1 - y0, x1 - x0, 3), np.uint8)
-        rx, ry = self.rays_x[y0:y1, x0:x1], self.rays_y[y0:y1, x0:x1]
-        smin = None
-        for uv, nc, kk, cen in faces:
-            dist = max(np.linalg.norm(cen), 1e-3)
-            fall = min(max((self.light_distance / dist) ** 1.5, 0.3), 1.3)
-            shade = min((0.25 + 0.75 * max(-np.dot(nc, cen) / dist, 0.0)) * fall, 1.3)
-            cv2.fillPoly(colour, [np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)],
-                         tuple(max(1.0, min(255.0, c * shade)) for c in self._bone_bgr[:3]),
-                         cv2.LINE_8, 4)
-            # inverse depth of the face plane along ray (x, y, 1): (n . ray) / kk
-            sf = cv2.addWeighted(rx, float(nc[0] / kk), ry, float(nc[1] / kk), float(nc[2] / kk))
-            smin = sf if smin is None else np.minimum(smin, sf, out=smin)
-        isub = idepth[y0:y1, x0:x1]
-        ok = cv2.bitwise_and(cv2.compare(colour[..., 0], 0, cv2.CMP_GT),
-                             cv2.compare(smin, isub, cv2.CMP_GT))
-        cv2.copyTo(colour, ok, img[y0:y1, x0:x1])
-        cv2.copyTo(smin, ok, isub)
+        # inverse depth in the union of the rectangles (0 = nothing)
+        ux0, uy0 = min(r[0] for r in rects), min(r[1] for r in rects)
+        ux1, uy1 = max(r[2] for r in rects), max(r[3] for r in rects)
+        if depth is not None:
+            dsub = depth[uy0:uy1, ux0:ux1]
+        else:
+            dsub = self._tissue_depth_rect(tissue_lo, ux0, uy0, ux1, uy1)
+        idepth = np.divide(np.float32(1.0), dsub)
+        colour_buf, mask_buf, s_buf, t_buf = self._box_scratch()
+        for x0, y0, x1, y1, fl in rects:
+            hh, ww = y1 - y0, x1 - x0
+            colour, mask = colour_buf[:hh, :ww], mask_buf[:hh, :ww]
+            smin, tmp = s_buf[:hh, :ww], t_buf[:hh, :ww]
+            mask[...] = 0   # colour needs no clearing: only masked pixels are copied
+            if len(fl) > 1:
+                smin[...] = np.inf
+            for k, (uv, i, (f0, f1)) in enumerate(fl):
+                poly = [np.round((uv - [x0, y0]) * 16).astype(np.int32).reshape(-1, 1, 2)]
+                cv2.fillPoly(colour, poly, tuple(float(v) for v in colours[i]), cv2.LINE_8, 4)
+                cv2.fillPoly(mask, poly, 255, cv2.LINE_8, 4)
+                # plane over the face's own rectangle (2 px margin: every pixel fillPoly covers
+                # lies in the rectangle of the face it belongs to, whose plane is the smallest)
+                fx0, fy0 = max(f0[0], x0), max(f0[1], y0)
+                fx1, fy1 = min(f1[0], x1), min(f1[1], y1)
+                if fx0 >= fx1 or fy0 >= fy1:
+                    continue
+                sl = (slice(fy0 - y0, fy1 - y0), slice(fx0 - x0, fx1 - x0))
+                a, bb, cc = (float(v) for v in planes[i])
+                rx, ry = self.rays_x[fy0:fy1, fx0:fx1], self.rays_y[fy0:fy1, fx0:fx1]
+                if len(fl) == 1:
+                    cv2.addWeighted(rx, a, ry, bb, cc, dst=smin[sl])
+                else:   # smallest plane where face rectangles overlap
+                    cv2.addWeighted(rx, a, ry, bb, cc, dst=tmp[sl])
+                    cv2.min(smin[sl], tmp[sl], dst=smin[sl])
+            isub = idepth[y0 - uy0:y1 - uy0, x0 - ux0:x1 - ux0]
+            ok = cv2.bitwise_and(mask, cv2.compare(smin, isub, cv2.CMP_GT))
+            cv2.copyTo(colour, ok, img[y0:y1, x0:x1])
+            cv2.copyTo(smin, ok, isub)
+        if depth is not None:
+            with np.errstate(divide='ignore'):
+                np.divide(np.float32(1.0), idepth, out=dsub)
+
+    def _tissue_depth_rect(self, t_lo, x0, y0, x1, y1):
+        """Full-resolution tissue depth in [y0:y1, x0:x1] from the tissue grid ``t_lo`` (inf =
+        miss), equal to that region of the whole-image cv2.resize (+ patchNaNs): a block with
+        one grid cell of margin is upsampled by the integer grid step and cropped."""
+        s = self._tissue_step
+        H, W = self.cam.height, self.cam.width
+        h, w = t_lo.shape
+        if w * s != W or h * s != H:   # non-integer scale: whole image
+            d = cv2.resize(t_lo, (W, H), interpolation=cv2.INTER_LINEAR)
+            cv2.patchNaNs(d, np.inf)
+            return d[y0:y1, x0:x1]
+        j0, i0 = max(y0 // s - 1, 0), max(x0 // s - 1, 0)
+        j1, i1 = min(-(-y1 // s) + 1, h), min(-(-x1 // s) + 1, w)
+        blk = cv2.resize(t_lo[j0:j1, i0:i1], ((i1 - i0) * s, (j1 - j0) * s),
+                         interpolation=cv2.INTER_LINEAR)
+        cv2.patchNaNs(blk, np.inf)
+        return blk[y0 - j0 * s:y1 - j0 * s, x0 - i0 * s:x1 - i0 * s]
+
+    def _box_scratch(self):
+        """Image-sized scratch buffers of the box pass (allocated once per renderer)."""
+        if self._scratch is None:
+            H, W = self.cam.height, self.cam.width
+            self._scratch = (np.empty((H, W, 3), np.uint8), np.empty((H, W), np.uint8),
+                             np.empty((H, W), np.float32), np.empty((H, W), np.float32))
+        return self._scratch
 
     def _render_target(self, img, depth, T_world_cam, R, o):
         tgt, T_wb = self.target
@@ -682,9 +789,10 @@ class SceneRenderer(object):
 
     # -- per frame ------------------------------------------------------------------------
     def background(self, T_world_cam):
-        """Cached static layer for the camera pose (re-rendered when the pose changes)."""
+        """Cached static layer (image, depth or None) for the camera pose (re-rendered when the
+        pose changes); the full-resolution depth is only made when a target is shown."""
         if self._cache_pose is None or not np.allclose(self._cache_pose, T_world_cam, atol=1e-7):
-            self._cache = self.render_background(T_world_cam)
+            self._cache = self.render_background(T_world_cam, with_depth=False)
             self._cache_pose = np.array(T_world_cam, copy=True)
             self.background_renders += 1
         return self._cache
