@@ -71,7 +71,9 @@ struct Record
   std::map<std::string, Arrivals> arr;
   std::map<uint64_t, double> sample;      // TF stamp (ns) -> TF sample time [s] (measured samples)
   std::map<uint64_t, uint32_t> seq_of;    // TF stamp (ns) -> packet seq (udp mode, /touchball/left/state)
-  std::map<uint32_t, double> udp_sent;    // packet seq -> UDP send time [s] (measured packets)
+  std::vector<double> udp_sent;           // packet seq -> UDP send time [s] (measured packets; 0 = not
+                                          // measured); written by the sender thread only, read after it
+                                          // stopped: no lock on the send path
 };
 Record g;
 
@@ -249,6 +251,10 @@ int main(int argc, char** argv)
   const double duration = argc > 1 ? std::atof(argv[1]) : 10.0;
   const std::string mode = argc > 2 ? argv[2] : "tf";
   const std::string label = argc > 3 ? argv[3] : "";
+  // light: subscribe only /mesa_left/target_pose (as the SARAS arm driver does) so that the teleop
+  // nodelets do not serialise every intermediate hop for this process (bench/run then times the hops
+  // inside the manager with the LatencyRecorder nodelet)
+  const bool light = argc > 4 && std::string(argv[4]) == "light";
   int udp_port = 0, cmd_port = 0;
   const bool udp = mode.compare(0, 4, "udp:") == 0;
   if (udp && std::sscanf(mode.c_str(), "udp:%d:%d", &udp_port, &cmd_port) != 2)
@@ -265,7 +271,9 @@ int main(int argc, char** argv)
   ee.pose.position.x = 0.3;
   ee.pose.orientation.w = 1.0;
   std::mutex ee_mutex;
-  auto s0 = nh.subscribe<saras_msgs::HapticDeviceState>(
+  ros::Subscriber s0, s1, s2, s3, s5, s6;
+  if (!light)
+    s0 = nh.subscribe<saras_msgs::HapticDeviceState>(
       "/touchball/left/state", 1000,
       [](const saras_msgs::HapticDeviceState::ConstPtr& m) {
         record("0 touchball_state", *m);
@@ -273,13 +281,16 @@ int main(int argc, char** argv)
         g.seq_of[m->header.stamp.toNSec()] = m->packet_seq;
       },
       ros::VoidConstPtr(), fast);
-  auto s1 = nh.subscribe<geometry_msgs::PoseStamped>(
+  if (!light)
+    s1 = nh.subscribe<geometry_msgs::PoseStamped>(
       "/teleop/left/master_pose", 1000, [](const geometry_msgs::PoseStamped::ConstPtr& m) { record("1 master_pose", *m); },
       ros::VoidConstPtr(), fast);
-  auto s2 = nh.subscribe<geometry_msgs::TwistStamped>(
+  if (!light)
+    s2 = nh.subscribe<geometry_msgs::TwistStamped>(
       "/teleop/left/des_twist", 1000, [](const geometry_msgs::TwistStamped::ConstPtr& m) { record("2 des_twist", *m); },
       ros::VoidConstPtr(), fast);
-  auto s3 = nh.subscribe<geometry_msgs::TwistStamped>(
+  if (!light)
+    s3 = nh.subscribe<geometry_msgs::TwistStamped>(
       "/teleop/left/tank_twist", 1000, [](const geometry_msgs::TwistStamped::ConstPtr& m) { record("3 tank_twist", *m); },
       ros::VoidConstPtr(), fast);
   auto s4 = nh.subscribe<geometry_msgs::PoseStamped>(
@@ -290,10 +301,12 @@ int main(int argc, char** argv)
         ee.pose = m->pose;
       },
       ros::VoidConstPtr(), fast);
-  auto s5 = nh.subscribe<geometry_msgs::WrenchStamped>(
+  if (!light)
+    s5 = nh.subscribe<geometry_msgs::WrenchStamped>(
       "/touchball/left/wrench_cmd", 1000,
       [](const geometry_msgs::WrenchStamped::ConstPtr& m) { record("wrench_cmd", *m); }, ros::VoidConstPtr(), fast);
-  auto s6 = nh.subscribe<std_msgs::Float64>(
+  if (!light)
+    s6 = nh.subscribe<std_msgs::Float64>(
       "/teleop/tank_master/energy", 1000,
       [](const std_msgs::Float64::ConstPtr&) {
         const double now = ros::Time::now().toSec();
@@ -330,6 +343,7 @@ int main(int argc, char** argv)
       return 2;
     }
   }
+  g.udp_sent.assign(static_cast<std::size_t>((duration + 3.0) * 1000.0) + 16, 0.0);  // 1 kHz, no allocation later
   std::atomic<bool> draining(udp);
   std::thread drain([&] {
     if (!udp)
@@ -364,14 +378,13 @@ int main(int argc, char** argv)
     if (udp)
     {
       const double left_xyz[3] = { x, 0.0, 0.05 };
-      const std::vector<uint8_t> pkt = statePacket(++seq, t, left_xyz, right_xyz);
+      // sender_time = wall-clock send time (as the real console sends): the in-manager
+      // LatencyRecorder reads it from /touchball/left/state
       const double sent = ros::Time::now().toSec();
-      if (measuring)
-      {
-        std::lock_guard<std::mutex> lock(g.mutex);
-        g.udp_sent[seq] = sent;
-      }
+      const std::vector<uint8_t> pkt = statePacket(++seq, sent, left_xyz, right_xyz);
       (void)sendto(sock, pkt.data(), pkt.size(), 0, reinterpret_cast<const sockaddr*>(&dst), sizeof(dst));
+      if (measuring && seq < g.udp_sent.size())
+        g.udp_sent[seq] = sent;
     }
     else
     {
@@ -408,19 +421,24 @@ int main(int argc, char** argv)
     { "4 target_pose", "velocity_integrator -> /mesa_left/target_pose" },
   };
   std::printf("\n== %s mode %s ==\n", label.c_str(), mode.c_str());
-  if (udp)
+  if (light)
+  {
+    std::printf("\n(light probe: only /mesa_left/target_pose subscribed here; the hops are timed inside the "
+                "manager by the LatencyRecorder nodelet, table below)\n");
+  }
+  else if (udp)
   {
     // TF stamp (= receiver's receive stamp) -> UDP send time / TF sample time of measured packets
     std::map<uint64_t, double> from_udp, from_tf;
     for (const auto& kv : g.seq_of)
     {
-      auto it = g.udp_sent.find(kv.second);
-      if (it == g.udp_sent.end())
+      if (kv.second >= g.udp_sent.size() || g.udp_sent[kv.second] == 0.0)
         continue;
-      from_udp[kv.first] = it->second;
+      from_udp[kv.first] = g.udp_sent[kv.second];
       from_tf[kv.first] = kv.first * 1e-9;
     }
-    std::printf("\nUDP packets sent in the window: %zu, matched to a receiver sample: %zu\n", g.udp_sent.size(),
+    std::printf("\nUDP packets sent in the window: %zu, matched to a receiver sample: %zu\n",
+                static_cast<std::size_t>(std::count_if(g.udp_sent.begin(), g.udp_sent.end(), [](double x) { return x > 0.0; })),
                 from_udp.size());
     std::vector<std::pair<std::string, std::string>> full = chain;
     full.insert(full.begin(), { "0 touchball_state", "touchball_receiver -> /touchball/left/state" });
@@ -438,7 +456,9 @@ int main(int argc, char** argv)
               std::string(14, '-').c_str(), std::string(14, '-').c_str());
   for (const char* key : { "0 touchball_state", "1 master_pose", "4 target_pose", "wrench_cmd", "tank_master/energy" })
   {
-    if (!udp && std::string(key) == "0 touchball_state")
+    if ((!udp || light) && std::string(key) == "0 touchball_state")
+      continue;
+    if (light && std::string(key) != "4 target_pose")
       continue;
     std::vector<double> ts;
     for (double tt : g.arr[key].times)

@@ -1,0 +1,42 @@
+#!/usr/bin/env python3
+"""rostest: the receiver nodelet loaded into /teleop/teleop_manager publishes under the contract's
+names (/touchball/<side>/..., /tf, /touchball/status), streams the simulator's packets and is OK."""
+import sys
+import time
+import unittest
+
+import rospy
+import rostest
+from geometry_msgs.msg import PoseStamped
+from saras_msgs.msg import ComponentStatus, HapticDeviceState
+from tf2_msgs.msg import TFMessage
+
+
+class TestNodelet(unittest.TestCase):
+    def test_names_and_stream(self):
+        states, poses, tfs, status = [], [], [], []
+        rospy.Subscriber('/touchball/left/state', HapticDeviceState, states.append, queue_size=1000)
+        rospy.Subscriber('/touchball/right/pose', PoseStamped, poses.append, queue_size=1000)
+        rospy.Subscriber('/tf', TFMessage, tfs.append, queue_size=1000)
+        rospy.Subscriber('/touchball/status', ComponentStatus, status.append, queue_size=100)
+        end = time.monotonic() + 40.0
+        while time.monotonic() < end and (len(states) < 100 or not status or status[-1].level != 0):
+            time.sleep(0.1)
+        self.assertGreaterEqual(len(states), 100)
+        self.assertGreater(len(poses), 0)
+        self.assertEqual(status[-1].level, ComponentStatus.OK, status[-1].message)
+        st = [m for m in states if not m.stale][-1]
+        self.assertEqual(st.header.frame_id, 'touch_left/base')
+        self.assertEqual(st.device, 'left')
+        self.assertEqual(poses[-1].header.frame_id, 'touch_right/base')
+        children = set(t.child_frame_id for m in tfs for t in m.transforms)
+        self.assertIn('touch_left/stylus', children)
+        topics = [t for t, _ in rospy.get_published_topics()]
+        self.assertFalse([t for t in topics if t.startswith('/teleop/touchball')],
+                         'receiver topics moved into the manager namespace: %s' % topics)
+        self.assertIn('/touch_left/joint_states', topics)
+
+
+if __name__ == '__main__':
+    rospy.init_node('touchball_nodelet_test')
+    rostest.rosrun('saras_drivers', 'touchball_nodelet', TestNodelet, sys.argv)
