@@ -6,13 +6,21 @@
 //   visual_feedback_bench pipeline <seconds> <rate_hz> <width> <height>
 //       Loads the VisualFeedback nodelet in this process (as in a shared nodelet manager, zero
 //       copy), publishes a simulated stereo endoscope at <rate_hz>, counts frames in and out and
-//       the latency from the image stamp to the augmented image's arrival. Needs a ROS master.
+//       the latency from the image stamp to the augmented image's arrival (the counter is an
+//       intra-process subscriber: the same zero-copy path as a viewer nodelet in the manager).
+//       Drops are split into the nodelet's input queue and after it. Needs a ROS master.
+//   visual_feedback_bench pipeline-remote <seconds> <rate_hz> <width> <height>
+//       The same, but the augmented images are counted by `count` in another process (roscpp
+//       serialises every frame for it inside the nodelet's publish()).
+//   visual_feedback_bench count [timeout_s]
+//       That remote viewer: counts /visual_feedback/{left,right}/image and prints a line.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <mutex>
 #include <string>
@@ -160,7 +168,9 @@ int runCore(int iterations)
 class Pipeline
 {
 public:
-  Pipeline(int w, int h) : w_(w), h_(h)
+  /// @p count_outputs: subscribe the augmented images in this process (intra-process, zero
+  /// copy, as a viewer nodelet in the same manager); false when a separate process counts them.
+  Pipeline(int w, int h, bool count_outputs) : w_(w), h_(h), count_outputs_(count_outputs)
   {
     ros::NodeHandle nh;
     for (int e = 0; e < 2; ++e)
@@ -168,8 +178,9 @@ public:
       const std::string eye = e == 0 ? "left" : "right";
       image_pub_[e] = nh.advertise<sensor_msgs::Image>("/endoscope/" + eye + "/image_raw", 2);
       info_pub_[e] = nh.advertise<sensor_msgs::CameraInfo>("/endoscope/" + eye + "/camera_info", 2);
-      out_sub_[e] = nh.subscribe<sensor_msgs::Image>("/visual_feedback/" + eye + "/image", 10,
-                                                     [this, e](const sensor_msgs::ImageConstPtr& m) { onOut(m, e); });
+      if (count_outputs_)
+        out_sub_[e] = nh.subscribe<sensor_msgs::Image>("/visual_feedback/" + eye + "/image", 10,
+                                                       [this, e](const sensor_msgs::ImageConstPtr& m) { onOut(m, e); });
       const CameraIntrinsics k = intrinsics(w, h);
       info_[e].header.frame_id = "endoscope/" + eye + "_optical_frame";
       info_[e].width = w;
@@ -185,9 +196,12 @@ public:
     dist_pub_ = nh.advertise<std_msgs::Float64MultiArray>("/collision/distances", 1);
     status_sub_ = nh.subscribe<saras_msgs::ComponentStatus>(
         "/saras/status", 10, [this](const saras_msgs::ComponentStatusConstPtr& m) {
-          std::lock_guard<std::mutex> lock(mutex_);
+            std::lock_guard<std::mutex> lock(mutex_);
           if (m->component == "/bench_vf")
+          {
             status_ = m->message;
+            status_stamp_ = ros::WallTime::now();
+          }
         });
     // Tools' frames 10 cm in front of the cameras.
     std::vector<geometry_msgs::TransformStamped> tfs;
@@ -261,29 +275,71 @@ public:
 
   bool subscribed() const
   {
+    // The nodelet subscribes its inputs only once its outputs have subscribers (lazy).
     return image_pub_[0].getNumSubscribers() > 0 && image_pub_[1].getNumSubscribers() > 0 &&
-           out_sub_[0].getNumPublishers() > 0 && out_sub_[1].getNumPublishers() > 0;
+           (!count_outputs_ || (out_sub_[0].getNumPublishers() > 0 && out_sub_[1].getNumPublishers() > 0));
+  }
+
+  /// Waits (up to @p timeout s) for a heartbeat sent after @p since: its counts are final.
+  void waitForHeartbeat(const ros::WallTime& since, double timeout)
+  {
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(timeout);
+    while (ros::WallTime::now() < until)
+    {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (status_stamp_ > since)
+          return;
+      }
+      ros::WallDuration(0.05).sleep();
+    }
   }
 
   void report(double seconds, double rate)
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::printf("%-10s %6s %6s %8s %8s %8s %8s %12s %12s %12s\n", "image", "rate", "secs", "in_L", "out_L", "in_R",
-                "out_R", "lat_mean_ms", "lat_p99_ms", "lat_max_ms");
     char name[32];
     std::snprintf(name, sizeof(name), "%dx%d", w_, h_);
-    std::printf("%-10s %6.1f %6.1f %8llu %8llu %8llu %8llu %12.3f %12.3f %12.3f\n", name, rate, seconds,
-                static_cast<unsigned long long>(in_[0]), static_cast<unsigned long long>(out_[0]),
-                static_cast<unsigned long long>(in_[1]), static_cast<unsigned long long>(out_[1]), latency_.mean(),
-                latency_.pct(0.99), latency_.pct(1.0));
+    // Frames the nodelet took from its input queues, per eye, from its heartbeat ("left: N in").
+    long long taken[2] = {-1, -1};
+    const char* eyes[2] = {"left: ", "right: "};
+    for (int e = 0; e < 2; ++e)
+    {
+      const std::size_t at = status_.find(eyes[e]);
+      if (at != std::string::npos)
+        taken[e] = std::atoll(status_.c_str() + at + std::strlen(eyes[e]));
+    }
+    if (count_outputs_)
+    {
+      std::printf("%-10s %6s %6s %8s %8s %8s %8s %12s %12s %12s\n", "image", "rate", "secs", "in_L", "out_L", "in_R",
+                  "out_R", "lat_mean_ms", "lat_p99_ms", "lat_max_ms");
+      std::printf("%-10s %6.1f %6.1f %8llu %8llu %8llu %8llu %12.3f %12.3f %12.3f\n", name, rate, seconds,
+                  static_cast<unsigned long long>(in_[0]), static_cast<unsigned long long>(out_[0]),
+                  static_cast<unsigned long long>(in_[1]), static_cast<unsigned long long>(out_[1]), latency_.mean(),
+                  latency_.pct(0.99), latency_.pct(1.0));
+    }
+    else
+      std::printf("%-10s %6.1f Hz %6.1f s: published %llu left, %llu right (outputs counted by the remote "
+                  "process below)\n",
+                  name, rate, seconds, static_cast<unsigned long long>(in_[0]),
+                  static_cast<unsigned long long>(in_[1]));
     std::printf("nodelet per-frame cost (its heartbeat): %s\n", status_.c_str());
-    std::printf("drops: left %lld, right %lld\n", static_cast<long long>(in_[0]) - static_cast<long long>(out_[0]),
-                static_cast<long long>(in_[1]) - static_cast<long long>(out_[1]));
-  }
-
-  std::uint64_t drops() const
-  {
-    return (in_[0] - out_[0]) + (in_[1] - out_[1]);
+    // Where frames were lost: before the nodelet's callback (subscription/synchroniser queues
+    // overflowing while it is stalled) or after it (the viewer's queue).
+    for (int e = 0; e < 2; ++e)
+    {
+      if (taken[e] < 0)
+      {
+        std::printf("drops %s: no heartbeat\n", e == 0 ? "left" : "right");
+        continue;
+      }
+      const long long in = static_cast<long long>(in_[e]);
+      if (count_outputs_)
+        std::printf("drops %-5s: %lld (%lld in the nodelet's input queue, %lld after it)\n", e == 0 ? "left" : "right",
+                    in - static_cast<long long>(out_[e]), in - taken[e], taken[e] - static_cast<long long>(out_[e]));
+      else
+        std::printf("drops %-5s: %lld in the nodelet's input queue\n", e == 0 ? "left" : "right", in - taken[e]);
+    }
   }
 
 private:
@@ -291,7 +347,9 @@ private:
   ros::Publisher image_pub_[2], info_pub_[2], pose_pub_[2], dist_pub_;
   ros::Subscriber out_sub_[2], status_sub_;
   ImagePool input_pool_[2];
+  bool count_outputs_;
   std::string status_;
+  ros::WallTime status_stamp_;
   sensor_msgs::CameraInfo info_[2];
   tf2_ros::StaticTransformBroadcaster static_tf_;
   std::mutex mutex_;
@@ -299,7 +357,7 @@ private:
   Stats latency_;
 };
 
-int runPipeline(int argc, char** argv)
+int runPipeline(int argc, char** argv, bool count_outputs)
 {
   const double seconds = argc > 2 ? std::atof(argv[2]) : 60.0;
   const double rate = argc > 3 ? std::atof(argv[3]) : 60.0;
@@ -308,7 +366,10 @@ int runPipeline(int argc, char** argv)
   ros::init(argc, argv, "visual_feedback_bench", ros::init_options::AnonymousName);
   ros::AsyncSpinner spinner(2);
   spinner.start();
-  Pipeline pipe(w, h);
+  Pipeline pipe(w, h, count_outputs);
+  // The heartbeat keeps its per-frame counts for a while after the last frame (the bench reads
+  // the final counts from it); everything else at its default.
+  ros::param::set("/bench_vf/image_timeout", 10.0);
   nodelet::Loader loader(false);
   nodelet::M_string remap;
   remap["/left/image_raw"] = "/endoscope/left/image_raw";
@@ -343,10 +404,59 @@ int runPipeline(int argc, char** argv)
     ++k;
     r.sleep();
   }
+  const ros::WallTime end = ros::WallTime::now();
   ros::WallDuration(0.5).sleep();  // let the last frames arrive
-  pipe.report((ros::WallTime::now() - start).toSec() - 0.5, rate);
+  pipe.waitForHeartbeat(ros::WallTime::now(), 3.0);  // counts after the last frame
+  pipe.report((end - start).toSec(), rate);
+  std::fflush(stdout);  // before the teardown
+  loader.clear();       // unload the nodelet while the spinner still serves the bench's callbacks
+  ros::WallDuration(0.2).sleep();
   spinner.stop();
-  loader.clear();
+  return 0;
+}
+
+/// A viewer in another process: counts the augmented images (serialised over TCP) and their
+/// latency; exits @p idle_s after the last frame (or when none came within @p timeout_s).
+int runCount(int argc, char** argv)
+{
+  const double timeout_s = argc > 2 ? std::atof(argv[2]) : 90.0;
+  const double idle_s = 2.0;
+  ros::init(argc, argv, "visual_feedback_bench_viewer", ros::init_options::AnonymousName);
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  std::uint64_t out[2] = {0, 0};
+  Stats latency;
+  ros::WallTime last = ros::WallTime::now();
+  ros::Subscriber sub[2];
+  for (int e = 0; e < 2; ++e)
+    sub[e] = nh.subscribe<sensor_msgs::Image>(
+        std::string("/visual_feedback/") + (e == 0 ? "left" : "right") + "/image", 10,
+        [&, e](const sensor_msgs::ImageConstPtr& m) {
+          const double ms = (ros::Time::now() - m->header.stamp).toSec() * 1e3;
+          std::lock_guard<std::mutex> lock(mutex);
+          ++out[e];
+          latency.v.push_back(ms);
+          last = ros::WallTime::now();
+        },
+        ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const ros::WallTime start = ros::WallTime::now();
+  while (ros::ok())
+  {
+    ros::WallDuration(0.1).sleep();
+    std::lock_guard<std::mutex> lock(mutex);
+    const ros::WallTime now = ros::WallTime::now();
+    if ((out[0] + out[1] > 0 && (now - last).toSec() > idle_s) || (now - start).toSec() > timeout_s)
+      break;
+  }
+  spinner.stop();
+  std::lock_guard<std::mutex> lock(mutex);
+  std::printf("remote viewer (separate process, TCP): out_L %llu, out_R %llu, latency mean %.3f ms, p99 %.3f ms, "
+              "max %.3f ms\n",
+              static_cast<unsigned long long>(out[0]), static_cast<unsigned long long>(out[1]), latency.mean(),
+              latency.pct(0.99), latency.pct(1.0));
+  std::fflush(stdout);
   return 0;
 }
 }  // namespace
@@ -357,7 +467,14 @@ int main(int argc, char** argv)
   if (mode == "core")
     return runCore(argc > 2 ? std::atoi(argv[2]) : 300);
   if (mode == "pipeline")
-    return runPipeline(argc, argv);
-  std::fprintf(stderr, "usage: %s core [iterations] | pipeline <seconds> <rate_hz> <width> <height>\n", argv[0]);
+    return runPipeline(argc, argv, true);
+  if (mode == "pipeline-remote")
+    return runPipeline(argc, argv, false);
+  if (mode == "count")
+    return runCount(argc, argv);
+  std::fprintf(stderr,
+               "usage: %s core [iterations] | pipeline <seconds> <rate_hz> <width> <height> | pipeline-remote <seconds> "
+               "<rate_hz> <width> <height> | count [timeout_s]\n",
+               argv[0]);
   return 2;
 }

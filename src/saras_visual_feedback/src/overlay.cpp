@@ -109,6 +109,102 @@ Rgb colourOf(Proximity p, const OverlayStyle& style)
   }
 }
 
+const HudCache::Glyph& HudCache::glyph(unsigned char c)
+{
+  if (c < kFirstGlyph || c >= kFirstGlyph + kGlyphCount)
+    c = '?';  // as cv::putText
+  Glyph& g = glyphs_[c - kFirstGlyph];
+  if (g.ready)
+    return g;
+  const char text[2] = {static_cast<char>(c), '\0'};
+  int base = 0;
+  // Advance in font units: with scale 1 and thickness 0, getTextSize's width is the Hershey
+  // width (right - left bearing) of the glyph, an integer; cv::putText moves by it times its
+  // 16.16 fixed-point scale.
+  const int units = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 1.0, 0, &base).width;
+  const double fixed_scale = std::round(glyph_scale_ * 65536.0) / 65536.0;
+  g.advance = units * fixed_scale;
+  // Cell: the glyph's box with generous margins (strokes can pass the bearings and the cap
+  // line, and the outline adds its half thickness).
+  const cv::Size box = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, glyph_scale_, glyph_outline_, &base);
+  const int margin = glyph_outline_ + 2 + static_cast<int>(std::ceil(8.0 * glyph_scale_));
+  g.origin = cv::Point(margin, margin + box.height);
+  const cv::Size cell(static_cast<int>(std::ceil(g.advance)) + 2 * margin, box.height + base + 2 * margin);
+  g.fill = cv::Mat::zeros(cell, CV_8UC1);
+  g.outline = cv::Mat::zeros(cell, CV_8UC1);
+  cv::putText(g.fill, text, g.origin, cv::FONT_HERSHEY_SIMPLEX, glyph_scale_, cv::Scalar(255), glyph_thickness_,
+              cv::LINE_AA);
+  cv::putText(g.outline, text, g.origin, cv::FONT_HERSHEY_SIMPLEX, glyph_scale_, cv::Scalar(255), glyph_outline_,
+              cv::LINE_AA);
+  cv::threshold(g.outline, g.outline, 0, 255, cv::THRESH_BINARY);
+  // Keep only the outline's bounding box (it contains the thinner fill): fewer pixels to blend.
+  const cv::Rect ink = cv::boundingRect(g.outline);
+  if (ink.area() > 0)
+  {
+    g.fill = g.fill(ink).clone();
+    g.outline = g.outline(ink).clone();
+    g.origin -= ink.tl();
+  }
+  else
+  {
+    g.fill.release();  // a space: nothing to draw
+    g.outline.release();
+  }
+  g.ready = true;
+  ++glyph_renders_;
+  return g;
+}
+
+void HudCache::drawLine(cv::Mat& image, cv::Mat* mask, const char* text, cv::Point origin, double scale,
+                        int thickness, int outline, const cv::Scalar& colour)
+{
+  CV_Assert(image.depth() == CV_8U && image.channels() <= 4);
+  CV_Assert(!mask || (mask->type() == CV_8UC1 && mask->size() == image.size()));
+  if (scale != glyph_scale_ || thickness != glyph_thickness_ || outline != glyph_outline_)
+  {
+    for (Glyph& g : glyphs_)
+      g.ready = false;
+    glyph_scale_ = scale;
+    glyph_thickness_ = thickness;
+    glyph_outline_ = outline;
+  }
+  const int channels = image.channels();
+  int value[4];
+  for (int c = 0; c < 4; ++c)
+    value[c] = static_cast<int>(std::lround(std::min(255.0, std::max(0.0, colour[c]))));
+  double x = origin.x;  // exact pen position [px], as cv::putText's fixed-point one
+  for (const char* p = text; *p != '\0'; ++p)
+  {
+    const Glyph& g = glyph(static_cast<unsigned char>(*p));
+    // Cell position in the image, clipped to it.
+    const int x0 = static_cast<int>(std::lround(x)) - g.origin.x, y0 = origin.y - g.origin.y;
+    x += g.advance;
+    const cv::Rect cell = cv::Rect(x0, y0, g.fill.cols, g.fill.rows) & cv::Rect(0, 0, image.cols, image.rows);
+    for (int r = cell.y; r < cell.y + cell.height; ++r)
+    {
+      const std::uint8_t* a = g.fill.ptr<std::uint8_t>(r - y0);
+      const std::uint8_t* o = g.outline.ptr<std::uint8_t>(r - y0);
+      std::uint8_t* dst = image.ptr<std::uint8_t>(r);
+      std::uint8_t* m = mask ? mask->ptr<std::uint8_t>(r) : nullptr;
+      for (int col = cell.x; col < cell.x + cell.width; ++col)
+      {
+        const int alpha = a[col - x0];
+        if (m && o[col - x0])
+          m[col] = 255;
+        if (alpha == 0)
+          continue;
+        std::uint8_t* px = dst + col * channels;
+        for (int c = 0; c < channels; ++c)
+        {
+          const int v = (value[c] * alpha + 127) / 255;  // colour over black with the coverage
+          if (v > px[c])
+            px[c] = static_cast<std::uint8_t>(v);
+        }
+      }
+    }
+  }
+}
+
 void HudCache::draw(cv::Mat& image, ChannelOrder order, const char* const* lines, const Rgb* colours, std::size_t n)
 {
   // Key: image format + every line and colour.
@@ -134,17 +230,11 @@ void HudCache::draw(cv::Mat& image, ChannelOrder order, const char* const* lines
     block_.setTo(cv::Scalar::all(0));
     mask_.create(rows, cols, CV_8UC1);
     mask_.setTo(cv::Scalar(0));
+    // Text in its colour over a black outline (thickness + 2 px): the block is black wherever
+    // the mask is set and the text is not.
     int y = line_h;
     for (std::size_t i = 0; i < n; ++i, y += line_h)
-    {
-      const cv::Scalar colour = toScalar(colours[i], order);
-      cv::putText(block_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0, 255),
-                  thickness + 2, cv::LINE_AA);
-      cv::putText(block_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv::LINE_AA);
-      cv::putText(mask_, lines[i], cv::Point(10, y), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(255), thickness + 2,
-                  cv::LINE_AA);
-    }
-    cv::threshold(mask_, mask_, 0, 255, cv::THRESH_BINARY);
+      drawLine(block_, &mask_, lines[i], cv::Point(10, y), scale, thickness, thickness + 2, toScalar(colours[i], order));
     key_ = key;
     ++renders_;
   }

@@ -76,6 +76,20 @@ void atomicMax(std::atomic<std::uint64_t>& a, std::uint64_t v)
 VisualFeedbackNodelet::~VisualFeedbackNodelet()
 {
   status_timer_.stop();
+  // Unloading: shut the subscriptions and publishers down here, under connect_mutex_, so that a
+  // connection callback racing with the destruction (a viewer leaving as the publishers go away)
+  // cannot shut the same subscription down concurrently with the member destructors.
+  std::lock_guard<std::mutex> lock(connect_mutex_);
+  shutting_down_ = true;
+  for (Eye& eye : eyes_)
+  {
+    eye.sub.shutdown();
+    eye.pub.shutdown();
+    eye.compressed_pub.shutdown();
+  }
+  for (Tool& t : tools_)
+    t.sub.shutdown();
+  distances_sub_.shutdown();
 }
 
 void VisualFeedbackNodelet::readParameters()
@@ -115,7 +129,7 @@ void VisualFeedbackNodelet::readParameters()
   pnh.param("jpeg_quality", jpeg_quality_, 80);
   if (jpeg_quality_ < 1 || jpeg_quality_ > 100)
     throw paramError("jpeg_quality", "must be in [1, 100], got " + std::to_string(jpeg_quality_));
-  pnh.param("queue_size", queue_size_, 3);
+  pnh.param("queue_size", queue_size_, 6);
   if (queue_size_ < 1)
     throw paramError("queue_size", "must be >= 1");
   pnh.param<std::string>("component", component_, getName());
@@ -226,7 +240,9 @@ void VisualFeedbackNodelet::onInit()
   ros::SubscriberStatusCallback ros_cb = boost::bind(&VisualFeedbackNodelet::connectCb, this);
   for (Eye& eye : eyes_)
   {
-    eye.pub = it_->advertise(eye.name + "/image", 1, cb, cb);
+    // Publisher queue: only used for subscribers in other processes (serialised frames waiting
+    // for the socket); intra-process subscribers get the shared pointer in their own queue.
+    eye.pub = it_->advertise(eye.name + "/image", static_cast<uint32_t>(queue_size_), cb, cb);
     // JPEG stream for remote viewers (what compressed_image_transport would publish; that plugin
     // is not packaged in Debian). Encoded only while subscribed.
     eye.compressed_pub = getMTNodeHandle().advertise<sensor_msgs::CompressedImage>(eye.pub.getTopic() + "/compressed",
@@ -241,6 +257,8 @@ void VisualFeedbackNodelet::onInit()
 void VisualFeedbackNodelet::connectCb()
 {
   std::lock_guard<std::mutex> lock(connect_mutex_);
+  if (shutting_down_)
+    return;
   ros::NodeHandle& nh = getMTNodeHandle();
   bool any = false;
   for (std::size_t i = 0; i < eyes_.size(); ++i)
@@ -732,7 +750,7 @@ void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
     for (const Eye& e : eyes_)
     {
       const std::uint64_t pub = e.published;
-      text << e.name << ": " << pub << " out";
+      text << e.name << ": " << e.received.load() << " in, " << pub << " out";
       if (pub > 0)
         text << ", mean " << (e.busy_ns.load() / 1e6 / static_cast<double>(pub))
              << " ms, max " << e.max_busy_ns.load() / 1e6 << " ms, cpu mean "

@@ -2,9 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "saras_visual_feedback/overlay.h"
 
@@ -318,6 +320,89 @@ TEST(BorderPoint, RayFromPrincipalPointToTheInsetBorder)
   const cv::Point2d q = borderPoint(cv::Point2d(-3.0, 0.0), k, 10.0);
   EXPECT_NEAR(q.x, 10.0, 1e-9);
   EXPECT_NEAR(q.y, 240.0, 1e-9);
+}
+
+/// Ink-weighted centroid of a single-channel image.
+cv::Point2d inkCentroid(const cv::Mat& grey)
+{
+  const cv::Moments m = cv::moments(grey, false);
+  return {m.m10 / m.m00, m.m01 / m.m00};
+}
+
+// The HUD's glyph atlas against cv::putText itself (the independent reference): same footprint
+// to 1 px, same ink (coverage) to 2 %, same ink centroid to 0.25 px, at the HUD's 720p and
+// 1080p sizes and a small one; and each character is rasterised once.
+TEST(HudText, GlyphAtlasMatchesPutText)
+{
+  const char* text = "mesa_left: 12.3 mm | PSM2: -- mm (no pose) ?#~";
+  const struct
+  {
+    double scale;
+    int thickness;
+  } fonts[] = {{0.6, 1}, {0.9, 1}, {0.4, 1}, {1.2, 2}};
+  const cv::Scalar colour(0, 200, 255);  // BGR
+  for (const auto& f : fonts)
+  {
+    SCOPED_TRACE("scale " + std::to_string(f.scale));
+    const cv::Point origin(10, 60);
+    cv::Mat ref = cv::Mat::zeros(120, 1400, CV_8UC3), ref_mask = cv::Mat::zeros(120, 1400, CV_8UC1);
+    cv::putText(ref, text, origin, cv::FONT_HERSHEY_SIMPLEX, f.scale, colour, f.thickness, cv::LINE_AA);
+    cv::putText(ref_mask, text, origin, cv::FONT_HERSHEY_SIMPLEX, f.scale, cv::Scalar(255), f.thickness + 2,
+                cv::LINE_AA);
+    cv::threshold(ref_mask, ref_mask, 0, 255, cv::THRESH_BINARY);
+
+    HudCache hud;
+    cv::Mat out = cv::Mat::zeros(ref.size(), CV_8UC3), mask = cv::Mat::zeros(ref.size(), CV_8UC1);
+    hud.drawLine(out, &mask, text, origin, f.scale, f.thickness, f.thickness + 2, colour);
+
+    // Footprints equal up to the 0.5 px placement rounding of each glyph.
+    const cv::Mat k3 = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3));
+    cv::Mat grown_ref, grown_out;
+    cv::dilate(ref_mask, grown_ref, k3);
+    cv::dilate(mask, grown_out, k3);
+    EXPECT_EQ(cv::countNonZero(mask & ~grown_ref), 0);
+    EXPECT_EQ(cv::countNonZero(ref_mask & ~grown_out), 0);
+    EXPECT_GT(cv::countNonZero(ref_mask), 1000);
+    cv::Mat ref_ch[3], out_ch[3];
+    cv::split(ref, ref_ch);
+    cv::split(out, out_ch);
+    EXPECT_EQ(cv::countNonZero(out_ch[0]), 0);  // blue 0 in the colour: nothing drawn there
+    for (int c = 1; c < 3; ++c)
+    {
+      const double ink_ref = cv::sum(ref_ch[c])[0], ink_out = cv::sum(out_ch[c])[0];
+      EXPECT_NEAR(ink_out / ink_ref, 1.0, 0.02) << "channel " << c;
+      const cv::Point2d c_ref = inkCentroid(ref_ch[c]), c_out = inkCentroid(out_ch[c]);
+      EXPECT_NEAR(c_out.x, c_ref.x, 0.25);
+      EXPECT_NEAR(c_out.y, c_ref.y, 0.25);
+      // Vertical placement is exact (integer baseline): the row profiles agree closely.
+      cv::Mat rows_ref, rows_out;
+      cv::reduce(ref_ch[c], rows_ref, 1, cv::REDUCE_SUM, CV_64F);
+      cv::reduce(out_ch[c], rows_out, 1, cv::REDUCE_SUM, CV_64F);
+      EXPECT_LT(cv::norm(rows_ref, rows_out, cv::NORM_L1) / ink_ref, 0.05);
+    }
+    // Distinct characters of the text, each rasterised once; drawing again costs no rendering.
+    bool seen[256] = {};
+    std::size_t distinct = 0;
+    for (const char* p = text; *p; ++p)
+      if (!seen[static_cast<unsigned char>(*p)])
+      {
+        seen[static_cast<unsigned char>(*p)] = true;
+        ++distinct;
+      }
+    EXPECT_EQ(hud.glyphRenders(), distinct);
+    hud.drawLine(out, &mask, "12.3 mm", cv::Point(10, 100), f.scale, f.thickness, f.thickness + 2, colour);
+    EXPECT_EQ(hud.glyphRenders(), distinct);
+  }
+}
+
+// A glyph partly outside the image is clipped, not written out of bounds.
+TEST(HudText, ClipsAtTheImageBorder)
+{
+  HudCache hud;
+  cv::Mat img = cv::Mat::zeros(20, 30, CV_8UC4), mask = cv::Mat::zeros(20, 30, CV_8UC1);
+  hud.drawLine(img, &mask, "WWW 888", cv::Point(-5, 15), 0.9, 1, 3, cv::Scalar(255, 255, 255, 255));
+  EXPECT_GT(cv::countNonZero(mask), 50);
+  EXPECT_LT(cv::countNonZero(mask), 20 * 30);
 }
 
 int main(int argc, char** argv)

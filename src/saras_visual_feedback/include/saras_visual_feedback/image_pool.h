@@ -35,41 +35,45 @@ public:
    */
   sensor_msgs::ImagePtr acquire(std::size_t bytes)
   {
+    // The most recently handed-out free buffer first: when subscribers release frames promptly
+    // (intra-process), the same buffer is reused frame after frame and is still in the CPU
+    // caches, instead of cycling through kSize cold 6 MB buffers.
     for (std::size_t k = 0; k < kSize; ++k)
     {
-      const std::size_t i = (next_ + k) % kSize;
+      const std::size_t i = (last_ + kSize - k) % kSize;
       sensor_msgs::ImagePtr& slot = slots_[i];
       if (slot && slot.use_count() == 1)
-      {
-        next_ = (i + 1) % kSize;
-        if (slot->data.size() != bytes)
-          slot->data.resize(bytes);
-        return slot;
-      }
-      if (!slot)
-      {
-        slot = boost::make_shared<sensor_msgs::Image>();
-        slot->data.resize(bytes);
-        ++allocations_;
-        next_ = (i + 1) % kSize;
-        return slot;
-      }
+        return handOut(i, bytes);
     }
-    // All in use: replace the next slot (its old buffer lives on with its readers).
-    sensor_msgs::ImagePtr& slot = slots_[next_];
-    slot = boost::make_shared<sensor_msgs::Image>();
-    slot->data.resize(bytes);
-    ++allocations_;
-    next_ = (next_ + 1) % kSize;
-    return slot;
+    for (std::size_t i = 0; i < kSize; ++i)
+      if (!slots_[i])
+        return handOut(i, bytes);
+    // All in use: replace one slot (its old buffer lives on with its readers).
+    const std::size_t i = (last_ + 1) % kSize;
+    slots_[i].reset();
+    return handOut(i, bytes);
   }
 
   /// Buffers allocated since construction (steady state: stays at the number in flight).
   std::size_t allocations() const { return allocations_; }
 
 private:
+  sensor_msgs::ImagePtr handOut(std::size_t i, std::size_t bytes)
+  {
+    sensor_msgs::ImagePtr& slot = slots_[i];
+    if (!slot)
+    {
+      slot = boost::make_shared<sensor_msgs::Image>();
+      ++allocations_;
+    }
+    if (slot->data.size() != bytes)
+      slot->data.resize(bytes);
+    last_ = i;
+    return slot;
+  }
+
   std::array<sensor_msgs::ImagePtr, kSize> slots_;
-  std::size_t next_ = 0;
+  std::size_t last_ = 0;
   std::size_t allocations_ = 0;
 };
 

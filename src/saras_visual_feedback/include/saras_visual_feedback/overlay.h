@@ -102,9 +102,18 @@ struct ToolDrawResult
 constexpr std::size_t kMaxTools = 4;
 
 /**
- * @brief Caches the rendered HUD (anti-aliased text costs ~0.15 ms a line at 1080p): the text
- *        block is re-rendered only when its content, colours or the image format change, and
- *        blitted through a mask otherwise. One per image stream; not thread-safe.
+ * @brief Renders and caches the HUD text block. One per image stream; not thread-safe.
+ *
+ * Rasterising anti-aliased Hershey text (cv::putText) is expensive: ~1 ms a line at 1080p
+ * (every stroke is a thick anti-aliased polyline with round caps), i.e. ~5 ms for the HUD,
+ * and the distances change its text at their 20 Hz rate. Two levels of caching:
+ *  - the text block (colours applied, plus its outline mask) is re-composed only when its
+ *    content, colours or the image format change, and blitted through the mask otherwise;
+ *  - re-composition does not call cv::putText per line: each character is rasterised once
+ *    (per font scale) into a glyph atlas, with exactly the strokes cv::putText draws for it, and
+ *    lines are laid out with cv::putText's advances (the Hershey widths); a glyph lands on
+ *    the pixel grid at most 0.5 px from where cv::putText would put it (the test checks the
+ *    result against cv::putText).
  */
 class HudCache
 {
@@ -112,13 +121,42 @@ public:
   /// Draws @p n lines (text, RGB colour) at the top-left corner of @p image.
   void draw(cv::Mat& image, ChannelOrder order, const char* const* lines, const Rgb* colours, std::size_t n);
 
-  /// Number of (re-)renderings since construction.
+  /// Number of text-block (re-)compositions since construction.
   std::size_t renders() const { return renders_; }
 
+  /// Number of glyphs rasterised with cv::putText since construction (atlas misses).
+  std::size_t glyphRenders() const { return glyph_renders_; }
+
+  /**
+   * @brief Draws one line of text like cv::putText(image, text, origin, FONT_HERSHEY_SIMPLEX,
+   *        scale, colour, thickness, LINE_AA) would on a black image, from the glyph atlas;
+   *        @p mask (CV_8UC1, same size, optional) gets the binary footprint of the same text
+   *        drawn @p outline px thick. Pixels already set are kept where brighter (max).
+   */
+  void drawLine(cv::Mat& image, cv::Mat* mask, const char* text, cv::Point origin, double scale, int thickness,
+                int outline, const cv::Scalar& colour);
+
 private:
+  /// A character rasterised at one font scale: anti-aliased fill and binary outline footprint.
+  struct Glyph
+  {
+    bool ready = false;
+    cv::Mat fill;     ///< CV_8UC1 coverage 0..255 of the glyph drawn `thickness` px thick
+    cv::Mat outline;  ///< CV_8UC1 0/255, the glyph drawn `outline` px thick
+    cv::Point origin; ///< cv::putText origin inside the cell [px]
+    double advance = 0.0;  ///< horizontal advance [px]
+  };
+  const Glyph& glyph(unsigned char c);
+
   std::string key_;
   cv::Mat block_, mask_;
   std::size_t renders_ = 0;
+  // Glyph atlas for printable ASCII (others are drawn as '?', as cv::putText does).
+  static constexpr int kFirstGlyph = 32, kGlyphCount = 95;
+  Glyph glyphs_[kGlyphCount];
+  double glyph_scale_ = 0.0;
+  int glyph_thickness_ = 0, glyph_outline_ = 0;
+  std::size_t glyph_renders_ = 0;
 };
 
 /**

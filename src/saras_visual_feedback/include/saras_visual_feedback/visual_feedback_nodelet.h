@@ -105,6 +105,7 @@ private:
   ros::WallTimer status_timer_;
   std::mutex connect_mutex_;
   bool subscribed_inputs_ = false;
+  bool shutting_down_ = false;  ///< set by the destructor (under connect_mutex_): connectCb does nothing
 
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -125,7 +126,7 @@ private:
   int pose_buffer_size_ = 512;      ///< samples of pose history per tool (≈ 2 s at 250 Hz)
   double pose_stamp_tolerance_ = 0.02;  ///< [s] an image newer than the newest pose by more is a fallback
   int jpeg_quality_ = 80;          ///< JPEG quality of the compressed stream [1, 100]
-  int queue_size_ = 3;             ///< camera subscription queue [frames]
+  int queue_size_ = 6;             ///< camera subscription and publisher queue [frames]
   std::string component_;
 
   // Heartbeat.
