@@ -11,6 +11,10 @@ import rostest
 CASES = [
     ('dvrk_sim', ['_rate:=-5'], '~rate'),
     ('dvrk_sim', ['_bag:=/nonexistent/x.bag'], '~bag'),
+    ('dvrk_sim', ['_publish_link_tf:=true', '_publish_tf:=true'], '~publish_tf and ~publish_link_tf are exclusive'),
+    ('dvrk_sim', ['_publish_link_tf:=true', '_robot_description_param:=/nowhere/{arm}/urdf'],
+     '/nowhere/PSM1/urdf'),
+    ('dvrk_sim', ['_publish_link_tf:=2'], '~publish_link_tf must be a boolean'),
     ('endoscope_sim', ['_fps:=0'], '~fps'),
     ('endoscope_sim', ['_camera_info_dir:=/nonexistent'], 'camera_info'),
     ('contact_sim', ['_rate:=0'], '~rate'),
