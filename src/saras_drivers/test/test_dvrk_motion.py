@@ -122,7 +122,7 @@ def test_shipped_config_puts_tips_in_contract_workspace(which):
             assert 0.10 <= r <= 0.18, (arm, t, r)     # 10-18 cm below the RCM
             assert T[2, 3] < 0
             tip_w = frames[arm][1] @ np.append(T[:3, 3], 1.0)
-            assert np.linalg.norm(tip_w[:2] - [0.02, 0.0]) < 0.06  # near the surgical site
+            assert np.linalg.norm(tip_w[:2] - [0.02, 0.0]) < 0.065  # near the surgical site (PSM1 stitches beside the right iliac wing)
         q, T = s['ECM']
         assert len(q) == len(dm.ECM_JOINT_NAMES)
         assert T[2, 3] < 0

@@ -35,15 +35,20 @@ class LinkTfTest(unittest.TestCase):
                 for t in msg.transforms:
                     d[(t.header.frame_id, t.child_frame_id)] = vec(t)
             return cb
-        rospy.Subscriber('/tf', TFMessage, store(ours), queue_size=1000, tcp_nodelay=True)
-        rospy.Subscriber('/tf_ref', TFMessage, store(ref), queue_size=1000, tcp_nodelay=True)
-        rospy.Subscriber('/tf_static', TFMessage, store_static(static), queue_size=10)
-        rospy.Subscriber('/tf_static_ref', TFMessage, store_static(static_ref), queue_size=10)
+        subs = [rospy.Subscriber('/tf', TFMessage, store(ours), queue_size=1000, tcp_nodelay=True),
+                rospy.Subscriber('/tf_ref', TFMessage, store(ref), queue_size=1000, tcp_nodelay=True),
+                rospy.Subscriber('/tf_static', TFMessage, store_static(static), queue_size=10),
+                rospy.Subscriber('/tf_static_ref', TFMessage, store_static(static_ref), queue_size=10)]
         rospy.sleep(1.0)
         n0 = len(ours)
         t0 = rospy.get_time()
         rospy.sleep(WINDOW)
         n1, t1 = len(ours), rospy.get_time()
+        # stop the callbacks, then work on copies (dict() copies under the GIL)
+        for s in subs:
+            s.unregister()
+        rospy.sleep(0.2)
+        ours, ref, static, static_ref = dict(ours), dict(ref), dict(static), dict(static_ref)
         common = set(ours) & set(ref)
         self.assertGreater(len(common), 50, 'no common (frame, stamp) samples with robot_state_publisher')
         worst = 0.0
