@@ -14,11 +14,12 @@ Case names: <height>p<fps><m|s> (m = ECM moving, s = still). Needs the workspace
 import argparse
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
 import time
+
+from saras_drivers.bench_util import cpu_seconds, free_port
 
 LAUNCH = """<launch>
   <group ns="/dvrk">
@@ -39,23 +40,6 @@ LAUNCH = """<launch>
 FRAMES = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'saras_bringup',
                       'config', 'world_frames.yaml')
 SIZES = {720: (1280, 720), 1080: (1920, 1080), 360: (640, 360)}
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(('127.0.0.1', 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
-def cpu_seconds(pid):
-    try:
-        with open('/proc/%d/stat' % pid) as f:
-            fields = f.read().rsplit(')', 1)[1].split()
-    except OSError:
-        return None
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def find_pid(name, master_port):

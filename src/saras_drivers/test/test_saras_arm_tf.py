@@ -87,3 +87,28 @@ def test_bad_descriptions_are_clear_errors():
     with pytest.raises(ValueError, match='not in the published'):
         stf.UrdfTf('<robot><joint name="j" type="revolute"><parent link="a"/><child link="b"/>'
                    '<axis xyz="0 0 1"/></joint></robot>', ['k'])
+
+
+def test_tf_messages_refill_the_preallocated_message():
+    """urdf_tf_messages: one TFMessage allocated at start-up, refilled in place per sample with the
+    UrdfTf transforms and the given stamp; the fixed joints as a separate list."""
+    pytest.importorskip('geometry_msgs.msg')
+    from saras_drivers.urdf_tf_messages import UrdfTfMessages
+    kin = sak.load('left')
+    tf = stf.UrdfTf(_urdf('left'), kin.joint_names('mesa_left/'))
+    q0 = list(kin.pa_joints) + [0.0] * 6
+    msgs = UrdfTfMessages(tf, q0, 1)
+    q = list(kin.pa_joints) + [0.1, -0.2, 0.08, 0.3, -0.1, 0.2]
+    first = msgs.moving(q, 7)
+    ids = [id(t) for t in first.transforms]
+    second = msgs.moving(q, 8)
+    assert second is first and [id(t) for t in second.transforms] == ids
+    ref = tf.moving(q)
+    assert len(second.transforms) == len(ref) > 0
+    for t, (parent, child, xyz, quat) in zip(second.transforms, ref):
+        assert (t.header.frame_id, t.child_frame_id, t.header.stamp) == (parent, child, 8)
+        tr, ro = t.transform.translation, t.transform.rotation
+        np.testing.assert_allclose([tr.x, tr.y, tr.z], xyz, atol=0)
+        np.testing.assert_allclose([ro.x, ro.y, ro.z, ro.w], quat, atol=0)
+    fixed = msgs.static(3)
+    assert [(t.header.frame_id, t.child_frame_id) for t in fixed] == [(p, c) for p, c, _, _ in tf.fixed()]

@@ -1,0 +1,48 @@
+"""tf2_msgs/TFMessage adapter of :class:`saras_drivers.saras_arm_tf.UrdfTf` (what
+robot_state_publisher broadcasts), shared by the nodes that broadcast a robot's TF themselves
+(``saras_arms_state`` and ``dvrk_sim`` with their TF options).
+
+The moving-joint message is allocated once, in the order of ``UrdfTf.movable``, and refilled in
+place per joint sample (no per-sample message allocation). Units: m, quaternion [x, y, z, w].
+"""
+from geometry_msgs.msg import TransformStamped
+from tf2_msgs.msg import TFMessage
+
+
+def transform_stamped(parent, child, xyz, quat, stamp):
+    """One TransformStamped parent -> child."""
+    t = TransformStamped()
+    t.header.frame_id, t.child_frame_id, t.header.stamp = parent, child, stamp
+    fill(t, xyz, quat)
+    return t
+
+
+def fill(t, xyz, quat):
+    """Writes translation ``xyz`` and rotation ``quat`` into TransformStamped ``t`` in place."""
+    tr, ro = t.transform.translation, t.transform.rotation
+    tr.x, tr.y, tr.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
+    ro.x, ro.y, ro.z, ro.w = float(quat[0]), float(quat[1]), float(quat[2]), float(quat[3])
+
+
+class UrdfTfMessages(object):
+    """TF messages of one robot: :meth:`static` (fixed joints) and :meth:`moving` (movable joints,
+    one preallocated TFMessage refilled per sample)."""
+
+    def __init__(self, urdf_tf, q0, stamp):
+        """:param q0: any valid joint vector (in the order of the UrdfTf's joint_names) used to
+        allocate the moving-joint message."""
+        self.urdf_tf = urdf_tf
+        self.msg = TFMessage()
+        for parent, child, xyz, quat in urdf_tf.moving(q0):
+            self.msg.transforms.append(transform_stamped(parent, child, xyz, quat, stamp))
+
+    def static(self, stamp):
+        """Fixed joints, for /tf_static (latched, published once)."""
+        return [transform_stamped(p, c, xyz, quat, stamp) for p, c, xyz, quat in self.urdf_tf.fixed()]
+
+    def moving(self, q, stamp):
+        """The preallocated TFMessage refilled for joint vector ``q``, every transform stamped ``stamp``."""
+        for t, (_, _, xyz, quat) in zip(self.msg.transforms, self.urdf_tf.moving(q)):
+            t.header.stamp = stamp
+            fill(t, xyz, quat)
+        return self.msg
