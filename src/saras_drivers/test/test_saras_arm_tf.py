@@ -112,3 +112,31 @@ def test_tf_messages_refill_the_preallocated_message():
         np.testing.assert_allclose([ro.x, ro.y, ro.z, ro.w], quat, atol=0)
     fixed = msgs.static(3)
     assert [(t.header.frame_id, t.child_frame_id) for t in fixed] == [(p, c) for p, c, _, _ in tf.fixed()]
+
+
+def test_tf_rate_limiter_keeps_the_rate_on_a_grid():
+    """urdf_tf_messages.RateLimiter (robot_state_publisher's publish_frequency): 50 Hz out of a
+    jittery 300 Hz stream on average and never two broadcasts closer than the sample spacing
+    allows (grid +- one sample spacing and the jitter); every second sample of an exact 100 Hz stream; every sample at rate 0; after a gap or
+    a clock jump the next sample is broadcast at once."""
+    from saras_drivers.urdf_tf_messages import RateLimiter
+    rng = np.random.default_rng(3)
+    lim = RateLimiter(50.0)
+    t = np.arange(3000) / 300.0 + rng.uniform(-1e-3, 1e-3, 3000)   # 10 s at 300 Hz, +-1 ms
+    sent = [x for x in t if lim.due(x)]
+    assert abs(len(sent) - 500) <= 1
+    gaps = np.diff(sent)
+    assert gaps.min() > 0.02 - 1.0 / 300 - 2e-3 and gaps.max() < 0.02 + 1.0 / 300 + 2e-3
+    lim = RateLimiter(50)
+    flags = [lim.due(k / 100.0) for k in range(100)]
+    assert flags == [k % 2 == 0 for k in range(100)]
+    lim = RateLimiter(0.0)
+    assert all(lim.due(k * 1e-4) for k in range(50))
+    lim = RateLimiter(50.0)
+    assert lim.due(1.0) and not lim.due(1.005)
+    assert lim.due(3.0)                   # gap of 2 s
+    assert lim.due(2.5)                   # clock jumped back
+    assert not lim.due(2.51) and lim.due(2.52)
+    for bad in (-1.0, float('nan'), float('inf'), True, 'fast', None):
+        with pytest.raises(ValueError):
+            RateLimiter(bad)

@@ -121,7 +121,7 @@ public:
       typename Traits::Output proto;
       proto.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
       pt.pool.reset(new MessagePool<typename Traits::Output>(kPoolSize, proto));
-      pt.pub = nh.advertise<typename Traits::Output>(channels[i] + "/" + Traits::kOutput, 10);
+      pt.pub = nh.advertise<typename Traits::Output>(channels[i] + "/" + Traits::kOutput, kStreamQueue);
       pt.sub_des = nh.subscribe<typename Traits::Desired>(
           channels[i] + "/" + Traits::kDesired, 10,
           [this, i](const typename Traits::Desired::ConstPtr& m) { onDesired(i, *m); }, ros::VoidConstPtr(), fast);
@@ -132,9 +132,9 @@ public:
     }
     pin_sub_ = nh.subscribe("pin", 100, &TankNode::onPin, this, fast);
     ereq_sub_ = nh.subscribe("ext_ereq", 10, &TankNode::onExtEreq, this, fast);
-    pout_pub_ = nh.advertise<std_msgs::Float32>("pout", 100);
-    ereq_pub_ = nh.advertise<std_msgs::Float32>("ereq", 10);
-    energy_pub_ = nh.advertise<std_msgs::Float64>("energy", 10);
+    pout_pub_ = nh.advertise<std_msgs::Float32>("pout", kStreamQueue);
+    ereq_pub_ = nh.advertise<std_msgs::Float32>("ereq", kStreamQueue);
+    energy_pub_ = nh.advertise<std_msgs::Float64>("energy", kStreamQueue);
     last_step_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TankNode::onTimer, this);
     ROS_INFO("%s: %zu channel(s), T_init %.2f J, rate %.0f Hz", Traits::kName, channels.size(), p.T_init, rate);

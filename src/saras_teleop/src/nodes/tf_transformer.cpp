@@ -81,9 +81,9 @@ public:
     pose_pool_.reset(new MessagePool<geometry_msgs::PoseStamped>(kPoolSize, pose));
     twist_pool_.reset(new MessagePool<geometry_msgs::TwistStamped>(kPoolSize, twist));
     wrench_pool_.reset(new MessagePool<geometry_msgs::WrenchStamped>(kPoolSize, wrench));
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("master_pose", 10);
-    twist_pub_ = nh.advertise<geometry_msgs::TwistStamped>("master_twist", 10);
-    wrench_pub_ = nh.advertise<geometry_msgs::WrenchStamped>("wrench_cmd", 10);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("master_pose", kStreamQueue);
+    twist_pub_ = nh.advertise<geometry_msgs::TwistStamped>("master_twist", kStreamQueue);
+    wrench_pub_ = nh.advertise<geometry_msgs::WrenchStamped>("wrench_cmd", kStreamQueue);
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     tf_sub_ = nh.subscribe("/tf", 100, &TfTransformerNode::onTf, this, fast);
     tf_static_sub_ = nh.subscribe("/tf_static", 100, &TfTransformerNode::onTfStatic, this, fast);

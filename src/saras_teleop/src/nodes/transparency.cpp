@@ -64,8 +64,8 @@ public:
       wrench.header.frame_id = twist.header.frame_id = "mesa_" + n + "/sbs_world";
       c.wrench_pool.reset(new MessagePool<geometry_msgs::WrenchStamped>(kPoolSize, wrench));
       c.twist_pool.reset(new MessagePool<geometry_msgs::TwistStamped>(kPoolSize, twist));
-      c.pub_wrench = nh.advertise<geometry_msgs::WrenchStamped>(n + "/des_wrench", 10);
-      c.pub_twist = nh.advertise<geometry_msgs::TwistStamped>(n + "/des_twist", 10);
+      c.pub_wrench = nh.advertise<geometry_msgs::WrenchStamped>(n + "/des_wrench", kStreamQueue);
+      c.pub_twist = nh.advertise<geometry_msgs::TwistStamped>(n + "/des_twist", kStreamQueue);
       c.subs.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
           n + "/master_pose", 10, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onMasterPose(i, *m); },
           ros::VoidConstPtr(), fast));

@@ -70,7 +70,7 @@ public:
     tf_decimation_ = static_cast<unsigned>(dec);
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", 10);
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", kStreamQueue);
     start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
