@@ -10,7 +10,7 @@ from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import Float64MultiArray
 
 from saras_bringup.recording import (RecordingConfigError, check_bag, load_recording_config,
-                                     parse_recording_config, rosbag_command)
+                                     parse_recording_config, recorder_command)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHIPPED = os.path.join(HERE, '..', 'config', 'recording.yaml')
@@ -24,8 +24,10 @@ def test_shipped_recording_list_covers_the_deliverable():
         assert g in groups
     # compressed video only: raw 1080p stereo would be ~373 MB/s
     assert not any(s.topic.endswith('image_raw') for s in cfg.streams)
-    cmd = rosbag_command(cfg, '/tmp/x.bag')
-    assert cmd[:2] == ['rosbag', 'record'] and '--buffsize=%d' % cfg.buffer_mb in cmd
+    cmd = recorder_command(cfg, '/tmp/x.bag')
+    assert cmd[:3] == ['rosrun', 'saras_bringup', 'bag_recorder']
+    assert cmd[cmd.index('--buffsize') + 1] == str(cfg.buffer_mb)
+    assert cmd[cmd.index('--queue') + 1] == str(cfg.queue) and cfg.queue >= 1000
     assert set(cfg.topics) <= set(cmd)
 
 

@@ -1,6 +1,6 @@
 """The recording list of the ROS core & data-recording node and the check of a recorded bag.
 
-``load_recording_config`` validates ``config/recording.yaml``; ``rosbag_command`` turns it into the
+``load_recording_config`` validates ``config/recording.yaml``; ``recorder_command`` turns it into the
 ``rosbag record`` command line (bounded buffer, explicit topic list); ``check_bag`` measures every
 stream in a bag: message count, rate, sequence gaps (``header.seq`` jumps of a single publisher) and
 stamp gaps (intervals longer than ``gap_factor / rate``). rosbag's own "dropped" warnings are
@@ -26,8 +26,9 @@ class Stream(object):
 
 
 class RecordingConfig(object):
-    def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb):
+    def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb, queue=2000):
         self.streams = streams
+        self.queue = queue
         self.min_rate_fraction = min_rate_fraction
         self.gap_factor = gap_factor
         self.buffer_mb = buffer_mb
@@ -71,7 +72,8 @@ def parse_recording_config(data, control_rate=1000.0):
                            float(_number(data, 'min_rate_fraction', 0.8, 0.0, 1.0)),
                            float(_number(data, 'gap_factor', 3.0, 1.0, 100.0)),
                            int(_number(data, 'buffer_mb', 1024, 16, 65536)),
-                           int(_number(data, 'chunk_kb', 4096, 64, 1048576)))
+                           int(_number(data, 'chunk_kb', 4096, 64, 1048576)),
+                           int(_number(data, 'subscriber_queue', 2000, 100, 1000000)))
 
 
 def load_recording_config(path, control_rate=1000.0):
@@ -86,10 +88,13 @@ def load_recording_config(path, control_rate=1000.0):
         raise RecordingConfigError('%s: %s' % (path, exc))
 
 
-def rosbag_command(config, output, extra_topics=()):
-    """``rosbag record`` argv for the configured streams, writing ``output`` (a .bag path)."""
-    return (['rosbag', 'record', '--tcpnodelay', '-O', output,
-             '--buffsize=%d' % config.buffer_mb, '--chunksize=%d' % config.chunk_kb]
+def recorder_command(config, output, extra_topics=()):
+    """argv of saras_bringup's ``bag_recorder`` (rosbag record with a ``subscriber_queue`` deep
+    per-topic queue; rosbag record's fixed 100 lost bursts) for the configured streams, writing
+    ``output`` (a .bag path)."""
+    return (['rosrun', 'saras_bringup', 'bag_recorder', '--tcpnodelay', '-O', output,
+             '--buffsize', str(config.buffer_mb), '--chunksize', str(config.chunk_kb),
+             '--queue', str(config.queue)]
             + config.topics + list(extra_topics))
 
 
