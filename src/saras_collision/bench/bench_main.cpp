@@ -3,11 +3,22 @@
 //     (libfcl 0.7: its closed form for capsule-capsule and sphere-box, GJK/libccd for
 //     capsule-box) on the same random queries, at FCL's default distance_tolerance (1e-6) and
 //     at a tight one (1e-12, needed to agree with the exact distance within 1e-6 m).
-//     Fairness: FCL shapes and transforms are built once outside the timed loops; both sides
-//     read compact arrays of the same NQ (default 256) queries, hot in cache as the scene's
-//     data is in the node; each side's loop is a direct (inlined-lambda) loop, no std::function;
-//     one warm-up pass each, then REPS (default 41) repetitions with ours and FCL alternating
-//     inside every repetition (same machine load); median and minimum over the repetitions.
+//     Two FCL references, both with fcl::distance on the same queries:
+//      - "prebuilt": FCL shapes and transforms built once outside the timed loops (FCL's
+//        narrow phase alone; the strictest reference);
+//      - "raw": FCL given the same raw inputs as ours (axis end-points, radii, 8 vertices or the
+//        prebuilt OrientedBox), i.e. the shape objects exist already (one per role, as a user
+//        keeps them) and each query sets their sizes and builds their transforms, with the
+//        cheapest conversion (capsule frame: Duff et al. 2017 branchless orthonormal basis; box
+//        from 8 vertices: edge lengths, unit x and y edges, z = x cross y, centre; no validation,
+//        which ours does). The benchmark checks that both give the same distances.
+//     Both sides read compact arrays of the same NQ (default 256) queries, hot in cache as the
+//     scene's data is in the node; every loop is a direct (inlined-lambda) loop, no
+//     std::function, and calls the libraries' out-of-line functions (ours in
+//     libsaras_collision.so, FCL in libfcl.so: no inlining into the loop on either side); one
+//     warm-up pass each, then REPS (default 41) repetitions with ours and the FCL variants
+//     alternating inside every repetition (same machine load); median and minimum over the
+//     repetitions.
 //  2. Full colliding_regions cycle (4 tools: 6 tool pairs + 4 x N boxes) for N = 10, 100, 1000,
 //     with and without bounding-sphere culling.
 #include <fcl/geometry/shape/box.h>
@@ -18,6 +29,7 @@
 #include <Eigen/Geometry>
 
 #include <chrono>
+#include <cmath>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -119,6 +131,42 @@ double bestNs(int reps, int calls, F&& f)
   }
   return best;
 }
+
+/// Capsule [a, b] as FCL wants it: a proper rotation whose z axis is along b - a (Duff et al.,
+/// "Building an orthonormal basis, revisited", JCGT 2017: branchless), centred at the midpoint.
+inline void capsuleTransform(const Vector3d& a, const Vector3d& b, fcl::Transform3d& tf, double& length)
+{
+  const Vector3d d = b - a;
+  length = d.norm();
+  const Vector3d z = d * (1.0 / length);
+  const double sign = std::copysign(1.0, z.z());
+  const double k = -1.0 / (sign + z.z());
+  const double m = z.x() * z.y() * k;
+  auto& r = tf.matrix();
+  r(0, 0) = 1.0 + sign * z.x() * z.x() * k;
+  r(1, 0) = sign * m;
+  r(2, 0) = -sign * z.x();
+  r(0, 1) = m;
+  r(1, 1) = sign + z.y() * z.y() * k;
+  r(2, 1) = -z.y();
+  r(0, 2) = z.x();
+  r(1, 2) = z.y();
+  r(2, 2) = z.z();
+  tf.translation() = 0.5 * (a + b);
+}
+
+/// Box from its 8 vertices (documented order) as FCL wants it: sides, proper rotation, centre.
+inline void boxFromVertices(const Vector3d v[], fcl::Boxd& box, fcl::Transform3d& tf)
+{
+  const Vector3d ex = v[1] - v[0], ey = v[4] - v[0], ez = v[3] - v[0];
+  const double lx = ex.norm(), ly = ey.norm(), lz = ez.norm();
+  const Vector3d x = ex * (1.0 / lx), y = ey * (1.0 / ly);
+  tf.linear().col(0) = x;
+  tf.linear().col(1) = y;
+  tf.linear().col(2) = x.cross(y);
+  tf.translation() = 0.5 * (v[0] + v[6]);
+  box.side = Vector3d(lx, ly, lz);
+}
 }  // namespace
 
 int main()
@@ -134,8 +182,12 @@ int main()
   std::printf("# saras_collision benchmark: %d random queries (same for both), %d repetitions, ns per query\n", n,
               reps);
   std::printf("# median [minimum] over the repetitions; ratio = FCL / ours (medians)\n");
-  std::printf("%-18s %16s %18s %18s %10s %11s\n", "query", "ours [ns]", "FCL 1e-6 [ns]", "FCL 1e-12 [ns]",
-              "ratio 1e-6", "ratio 1e-12");
+  std::printf("# FCL prebuilt: shapes and transforms built before the timed loop (narrow phase only), at\n"
+              "#   distance_tolerance 1e-6 (default) and 1e-12; FCL raw: from the same raw inputs as ours\n"
+              "#   (sizes and transforms set per query), tolerance 1e-6\n");
+  std::printf("%-18s %15s %17s %17s %17s %8s %8s %8s\n", "query", "ours [ns]", "FCL prebuilt 1e-6",
+              "FCL prebuilt 1e-12", "FCL raw 1e-6", "ratio", "ratio", "ratio");
+  std::printf("%-18s %15s %17s %17s %17s %8s %8s %8s\n", "", "", "[ns]", "[ns]", "[ns]", "1e-6", "1e-12", "raw");
 
   auto fclLoop = [&fqs, n](double tol, int kind) {
     return [&fqs, n, tol, kind]() {
@@ -155,6 +207,85 @@ int main()
         g_sink = g_sink + res.min_distance;
       }
     };
+  };
+
+  // FCL from the raw inputs of ours (kind: 0 capsule-capsule, 1 capsule-box 8 vertices,
+  // 2 sphere-box 8 vertices, 3 capsule-box prebuilt box, 4 sphere-box prebuilt box). The box
+  // transform of kinds 3 and 4 is copied from the prebuilt OrientedBox.
+  // One FCL query from the raw inputs of ours (kind: 0 capsule-capsule, 1 capsule-box 8
+  // vertices, 2 sphere-box 8 vertices, 3 capsule-box prebuilt box, 4 sphere-box prebuilt box;
+  // the box transform of kinds 3 and 4 is copied from the prebuilt OrientedBox), with the shape
+  // objects and transforms of the caller.
+  struct FclRawShapes
+  {
+    fcl::Capsuled cap1{ 0.0, 0.0 }, cap2{ 0.0, 0.0 };
+    fcl::Sphered sphere{ 0.0 };
+    fcl::Boxd box{ 0.0, 0.0, 0.0 };
+    fcl::Transform3d tf1 = fcl::Transform3d::Identity(), tf2 = fcl::Transform3d::Identity();
+  };
+  auto fclRawQuery = [](const Query& q, int kind, FclRawShapes& sh, const fcl::DistanceRequestd& req) {
+    fcl::DistanceResultd res;
+    if (kind == 0 || kind == 1 || kind == 3)
+    {
+      capsuleTransform(q.p1, q.p2, sh.tf1, sh.cap1.lz);
+      sh.cap1.radius = q.r1;
+    }
+    else
+    {
+      sh.tf1.translation() = q.p1;
+      sh.sphere.radius = q.r1;
+    }
+    if (kind == 0)
+    {
+      capsuleTransform(q.p3, q.p4, sh.tf2, sh.cap2.lz);
+      sh.cap2.radius = q.r2;
+      fcl::distance(&sh.cap1, sh.tf1, &sh.cap2, sh.tf2, req, res);
+      return res.min_distance;
+    }
+    if (kind <= 2)
+    {
+      boxFromVertices(q.v, sh.box, sh.tf2);
+    }
+    else
+    {
+      sh.tf2.linear() = q.box.axes;
+      sh.tf2.translation() = q.box.center;
+      sh.box.side = 2.0 * q.box.half;
+    }
+    if (kind == 1 || kind == 3)
+      fcl::distance(&sh.cap1, sh.tf1, &sh.box, sh.tf2, req, res);
+    else
+      fcl::distance(&sh.sphere, sh.tf1, &sh.box, sh.tf2, req, res);
+    return res.min_distance;
+  };
+  auto fclRawLoop = [&qs, &fclRawQuery](int kind) {
+    return [&qs, &fclRawQuery, kind]() {
+      fcl::DistanceRequestd req;
+      req.enable_nearest_points = true;
+      FclRawShapes shapes;
+      for (const Query& q : qs)
+        g_sink = g_sink + fclRawQuery(q, kind, shapes, req);
+    };
+  };
+  // Largest |FCL raw - FCL prebuilt| distance over the queries of a row (the conversion check).
+  auto rawMismatch = [&](int kind, int raw_kind) {
+    fcl::DistanceRequestd req;
+    req.enable_nearest_points = true;
+    FclRawShapes shapes;
+    double worst = 0.0;
+    for (int i = 0; i < n; ++i)
+    {
+      const FclQuery& f = fqs[i];
+      fcl::DistanceResultd res;
+      if (kind == 0)
+        fcl::distance(&f.cap1, f.tf_cap1, &f.cap2, f.tf_cap2, req, res);
+      else if (kind == 1)
+        fcl::distance(&f.cap1, f.tf_cap1, &f.box, f.tf_box, req, res);
+      else
+        fcl::distance(&f.sphere, f.tf_sphere, &f.box, f.tf_box, req, res);
+      worst = std::max(worst, std::abs(fclRawQuery(qs[i], raw_kind, shapes, req) - res.min_distance));
+    }
+    return worst;
   };
 
   auto capsuleCapsule = [&]() {
@@ -192,38 +323,47 @@ int main()
       g_sink = g_sink + d;
     }
   };
-  auto row = [&](const char* name, auto&& ours, int kind) {
+  double max_raw_mismatch = 0.0;
+  auto row = [&](const char* name, auto&& ours, int kind, int raw_kind) {
     const auto f6 = fclLoop(1e-6, kind);
     const auto f12 = fclLoop(1e-12, kind);
+    const auto fraw = fclRawLoop(raw_kind);
     ours();  // warm-up (caches, branch predictors, page faults)
     f6();
     f12();
-    std::vector<double> t[3];
+    fraw();
+    // FCL from raw inputs must compute the same distances as FCL on the prebuilt transforms.
+    max_raw_mismatch = std::max(max_raw_mismatch, rawMismatch(kind, raw_kind));
+    std::vector<double> t[4];
     for (int r = 0; r < reps; ++r)
     {
       t[0].push_back(nsPerPass(n, ours));
       t[1].push_back(nsPerPass(n, f6));
       t[2].push_back(nsPerPass(n, f12));
+      t[3].push_back(nsPerPass(n, fraw));
     }
-    double med[3], lo[3];
-    for (int i = 0; i < 3; ++i)
+    double med[4], lo[4];
+    for (int i = 0; i < 4; ++i)
     {
       std::sort(t[i].begin(), t[i].end());
       med[i] = t[i][t[i].size() / 2];
       lo[i] = t[i].front();
     }
-    char c[3][40];
-    for (int i = 0; i < 3; ++i)
+    char c[4][40];
+    for (int i = 0; i < 4; ++i)
       std::snprintf(c[i], sizeof(c[i]), "%.1f [%.1f]", med[i], lo[i]);
-    std::printf("%-18s %16s %18s %18s %9.1fx %10.1fx\n", name, c[0], c[1], c[2], med[1] / med[0], med[2] / med[0]);
+    std::printf("%-18s %15s %17s %17s %17s %7.1fx %7.1fx %7.1fx\n", name, c[0], c[1], c[2], c[3], med[1] / med[0],
+                med[2] / med[0], med[3] / med[0]);
   };
-  row("capsule-capsule", capsuleCapsule, 0);
-  row("capsule-box (8 v)", capsuleBox8, 1);
-  row("sphere-box (8 v)", sphereBox8, 2);
-  row("capsule-box (box)", capsuleBox, 1);
-  row("sphere-box (box)", sphereBox, 2);
+  row("capsule-capsule", capsuleCapsule, 0, 0);
+  row("capsule-box (8 v)", capsuleBox8, 1, 1);
+  row("sphere-box (8 v)", sphereBox8, 2, 2);
+  row("capsule-box (box)", capsuleBox, 1, 3);
+  row("sphere-box (box)", sphereBox, 2, 4);
   std::printf("(8 v: deliverable signatures, box validated from its 8 vertices on every call; box: prebuilt\n"
-              " OrientedBox, capsuleBox(), as the node uses)\n\n");
+              " OrientedBox, capsuleBox(), as the node uses)\n");
+  std::printf("check: max |FCL raw - FCL prebuilt| distance over every row's queries = %.1e m\n\n",
+              max_raw_mismatch);
 
   std::printf("# full cycle: 4 tools (6 capsule pairs + 4 x N capsule-box), best of %d runs\n", reps);
   std::printf("%-8s %16s %18s\n", "N boxes", "culling [us]", "no culling [us]");

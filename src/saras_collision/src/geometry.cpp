@@ -157,6 +157,40 @@ struct BoxEdges
   double lx2, ly2, lz2;  ///< squared edge lengths [m^2]
 };
 
+/// Edge vectors and squared lengths of 8 vertices (documented order), first part of the box test.
+SARAS_COLLISION_INLINE void boxEdges(const Eigen::Vector3d v[], BoxEdges& e)
+{
+  const Eigen::Vector3d& v0 = v[0];
+  e.ex = v[1] - v0;
+  e.ey = v[4] - v0;
+  e.ez = v[3] - v0;
+  e.lx2 = e.ex.squaredNorm();
+  e.ly2 = e.ey.squaredNorm();
+  e.lz2 = e.ez.squaredNorm();
+}
+
+/// The combined test of validateBox() on edges from boxEdges(): true for a box within rt.
+SARAS_COLLISION_INLINE bool boxShapePasses(const Eigen::Vector3d v[], const BoxEdges& e, double rt2)
+{
+  const double diag2 = e.lx2 + e.ly2 + e.lz2;
+  const double tol2 = rt2 * diag2;
+  const double xy = e.ex.dot(e.ey), xz = e.ex.dot(e.ez), yz = e.ey.dot(e.ez);
+  const double cos2 = (xy * xy) * e.lz2 + (xz * xz) * e.ly2 + (yz * yz) * e.lx2;
+  const Eigen::Array3d r2 = ((v[2] - v[3]) - e.ex).array(), r5 = ((v[5] - v[4]) - e.ex).array();
+  const Eigen::Array3d r6 = ((v[6] - v[5]) - e.ez).array(), r7 = ((v[7] - v[4]) - e.ez).array();
+  const double residual2 = ((r2 * r2 + r5 * r5) + (r6 * r6 + r7 * r7)).sum();
+  // Bitwise & on purpose: one combined test, no branch per condition.
+  return (diag2 < std::numeric_limits<double>::infinity()) & (minD(minD(e.lx2, e.ly2), e.lz2) > tol2) &
+         (cos2 <= rt2 * (e.lx2 * e.ly2 * e.lz2)) & (residual2 <= tol2);
+}
+
+/// boxEdges() then boxShapePasses().
+SARAS_COLLISION_INLINE bool boxTestPasses(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
+{
+  boxEdges(v, e);
+  return boxShapePasses(v, e, rt2);
+}
+
 /**
  * Checks that 8 vertices are a rectangular box in the documented order, within the relative
  * tolerance rt (@p rt2 = rt^2):
@@ -169,29 +203,12 @@ struct BoxEdges
  * Branch-free: one combined test, each written to be false on NaN, so non-finite vertices fail
  * it (an infinite edge fails the first test, then every residual with a non-finite vertex is
  * NaN or infinite); only then are the vertices scanned to tell kInvalidInput from kInvalidBox.
+ * Split into boxEdges() and boxShapePasses() so that a caller can interleave its own work.
  * @return kSeparated (valid), kInvalidBox or kInvalidInput
  */
 SARAS_COLLISION_INLINE int validateBox(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
 {
-  const Eigen::Vector3d& v0 = v[0];
-  e.ex = v[1] - v0;
-  e.ey = v[4] - v0;
-  e.ez = v[3] - v0;
-  e.lx2 = e.ex.squaredNorm();
-  e.ly2 = e.ey.squaredNorm();
-  e.lz2 = e.ez.squaredNorm();
-  const double diag2 = e.lx2 + e.ly2 + e.lz2;
-  const double tol2 = rt2 * diag2;
-  const double xy = e.ex.dot(e.ey), xz = e.ex.dot(e.ez), yz = e.ey.dot(e.ez);
-  const double cos2 = (xy * xy) * e.lz2 + (xz * xz) * e.ly2 + (yz * yz) * e.lx2;
-  const Eigen::Array3d r2 = ((v[2] - v[3]) - e.ex).array(), r5 = ((v[5] - v[4]) - e.ex).array();
-  const Eigen::Array3d r6 = ((v[6] - v[5]) - e.ez).array(), r7 = ((v[7] - v[4]) - e.ez).array();
-  const double residual2 = ((r2 * r2 + r5 * r5) + (r6 * r6 + r7 * r7)).sum();
-  // Bitwise & on purpose: one combined test, no branch per condition.
-  const bool ok = (diag2 < std::numeric_limits<double>::infinity()) &
-                  (minD(minD(e.lx2, e.ly2), e.lz2) > tol2) &
-                  (cos2 <= rt2 * (e.lx2 * e.ly2 * e.lz2)) & (residual2 <= tol2);
-  if (ok)
+  if (boxTestPasses(v, rt2, e))
     return kSeparated;
   return verticesFinite(v) ? kInvalidBox : kInvalidInput;
 }
@@ -297,19 +314,24 @@ SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::V
 /**
  * Fast path of capsulePair() for the general case: non-degenerate axes more than ~1.8 degrees
  * from parallel (sin^2 > 1e-3, so that a e - b^2 does not cancel) whose closest points do not
- * coincide. Same minimiser (Ericson 5.1.9), with the clamping decisions taken division-free on
- * the numerators, so that the divisions run in parallel instead of in sequence:
- *   s* = sn / D with sn = b f - c e, D = a e - b^2 = |d1 x d2|^2;
- *   sc = clamp(sn, 0, D) (i.e. s = sc / D clamped to [0, 1]);
- *   t for that s: t = (b s + f) / e = tn / (e D) with tn = b sc + f D;
- *   tn < 0      -> t = 0, s = clamp(-c / a, 0, 1);
- *   tn > e D    -> t = 1, s = clamp((b - c) / a, 0, 1);
- *   otherwise   -> t = tn / (e D), s = sc / D.
- * The four reciprocals (1/a, 1/D, 1/(e D), 1/|v|^2) and the square root are the only long
- * operations; 1/|v| = sqrt(|v|^2) / |v|^2 overlaps the square root.
- * @return false (outputs untouched) when the case is not general or an input is not finite /
- *         a product overflows (every comparison below is false on NaN); capsulePair() then
- *         handles it.
+ * coincide. Same minimiser (Ericson 5.1.9), written for a short dependency chain and few
+ * instructions: every clamp is taken division-free on a numerator over the common denominator
+ * M = a e D (D = a e - b^2 = |d1 x d2|^2), and the one reciprocal 1 / M runs in parallel:
+ *   sn = b f - c e (unconstrained s* = sn / D), sc = clamp(sn, 0, D);
+ *   tn = b sc + f D (t re-optimised for the clamped s, times e D);
+ *   tc = clamp(tn, 0, e D)                          (t = tc / (e D) = T / M, T = tc a);
+ *   S = clamp(b tc - c e D, 0, M)                   (s = clamp((b t - c) / a, 0, 1) = S / M).
+ * The last line is Ericson's "recompute s for the clamped t" and, when t was not clamped, it
+ * gives back sc / D: either s* is interior and (s, t) is the stationary point, where
+ * (b t - c) / a = s exactly, or sc is a bound and the KKT condition of the convex problem at
+ * that bound (dF/ds >= 0 at s = 0, <= 0 at s = 1) puts (b t - c) / a beyond it. No selects.
+ * The axis difference scaled by M, V = M w + S d1 - T d2 = M (q1 - q2), is formed without
+ * waiting for the division, so the square root of |V|^2 starts early; |q1 - q2| = |V| / M and
+ * the unit normal V / |V| (1 / |V| = sqrt(|V|^2) / |V|^2, the division overlapping the square
+ * root). M is a normal number (a, e > 1e-30, D > 1e-3 a e) and |V|^2 is required to be one.
+ * @return false (outputs untouched) when the case is not general, an input is not finite or a
+ *         product overflows or underflows (every comparison below is false on NaN);
+ *         capsulePair() (through capsulePairAnyScale()) then handles it.
  */
 SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
                                             const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2,
@@ -317,7 +339,8 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
                                             Eigen::Vector3d& normal)
 {
   // Scalar code: GCC -O2 emits fewer instructions for it than for the Eigen 3-vector
-  // expressions, and the per-query time of this function is bound by its instruction count.
+  // expressions.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
   const double p1x = p1[0], p1y = p1[1], p1z = p1[2], p3x = p3[0], p3y = p3[1], p3z = p3[2];
   const double d1x = p2[0] - p1x, d1y = p2[1] - p1y, d1z = p2[2] - p1z;
   const double d2x = p4[0] - p3x, d2y = p4[1] - p3y, d2z = p4[2] - p3z;
@@ -330,32 +353,38 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
   const double ae = a * e;
   const double denom = ae - b * b;  // |d1 x d2|^2; cancels near parallel: then capsulePair()
   const double ed = e * denom;
-  // One predictable branch for every special case (false on NaN / overflow).
-  if (!((a > kDegenerateLength2) & (e > kDegenerateLength2) & (denom > 1e-3 * ae) &
-        (ed < std::numeric_limits<double>::infinity())))
-    return false;
-  const double inv_a = 1.0 / a, inv_denom = 1.0 / denom, inv_ed = 1.0 / ed;  // in parallel
-  const double sc = minD(maxD(b * f - c * e, 0.0), denom);
+  const double m = ae * denom;
+  const double sn = b * f - c * e;
+  const double sc = minD(maxD(sn, 0.0), denom);
   const double tn = b * sc + f * denom;
-  const double t = minD(maxD(tn, 0.0), ed) * inv_ed;
-  const double s_t0 = clamp01(-c * inv_a), s_t1 = clamp01((b - c) * inv_a);
-  const double s = selectLess(tn, 0.0, s_t0, selectLess(ed, tn, s_t1, sc * inv_denom));
-  const double q1x = p1x + s * d1x, q1y = p1y + s * d1y, q1z = p1z + s * d1z;
-  const double q2x = p3x + t * d2x, q2y = p3y + t * d2y, q2z = p3z + t * d2z;
-  const double vx = q1x - q2x, vy = q1y - q2y, vz = q1z - q2z;
-  const double axis2 = vx * vx + vy * vy + vz * vz;
-  if (!(axis2 > kMinAxis2))
+  const double rho = 1.0 / m;  // in parallel with everything up to the square root
+  const double tc = minD(maxD(tn, 0.0), ed);  // t = tc / (e D) = tc a / M
+  const double T = tc * a;
+  const double sv = b * tc - c * ed;
+  const double S = minD(maxD(sv, 0.0), m);  // s = clamp((b t - c) / a) = S / M
+  const double vx = (m * wx + S * d1x) - T * d2x;
+  const double vy = (m * wy + S * d1y) - T * d2y;
+  const double vz = (m * wz + S * d1z) - T * d2z;
+  const double v2 = vx * vx + vy * vy + vz * vz;
+  // One predictable branch for every special case (each test is false on NaN; sn, tn, sv
+  // finite: no product overflowed, so no clamp above turned an overflow into a number; an
+  // overflow in V makes |V|^2 infinite).
+  if (!((minD(a, e) > kDegenerateLength2) & (denom > 1e-3 * ae) & (m < kInf) &
+        ((std::abs(sn) + std::abs(tn)) + std::abs(sv) < kInf) & (v2 > 1e-290) & (v2 < kInf)))
     return false;
-  const double inv_axis2 = 1.0 / axis2;  // overlaps the square root
-  const double axis = std::sqrt(axis2);
-  const double dist = axis - (r1 + r2);
-  const double inv_axis = axis * inv_axis2;
-  const double nx = vx * inv_axis, ny = vy * inv_axis, nz = vz * inv_axis;
-  const double k = surfaceFactor(dist);
-  const double k1 = k * r1, k2 = k * r2;
-  normal = Eigen::Vector3d(nx, ny, nz);
-  point1 = Eigen::Vector3d(q1x - k1 * nx, q1y - k1 * ny, q1z - k1 * nz);
-  point2 = Eigen::Vector3d(q2x + k2 * nx, q2y + k2 * ny, q2z + k2 * nz);
+  const double len = std::sqrt(v2);
+  const double inv_v2 = 1.0 / v2;  // overlaps the square root, as do the next products
+  const double rr = r1 + r2, r1_v2 = r1 * inv_v2, r2_v2 = r2 * inv_v2;
+  const double dist = len * rho - rr;
+  const double inv_len = len * inv_v2;
+  // Radius offsets along the normal, r_i V / |V| = V (len r_i / |V|^2), zeroed without a
+  // multiplication when intersecting (witness points on the axes).
+  const double k1 = selectLess(dist, -kTangentTolerance, 0.0, len * r1_v2);
+  const double k2 = selectLess(dist, -kTangentTolerance, 0.0, len * r2_v2);
+  const double s = clamp01(S * rho), t = clamp01(T * rho);
+  normal = Eigen::Vector3d(vx * inv_len, vy * inv_len, vz * inv_len);
+  point1 = Eigen::Vector3d((p1x + s * d1x) - k1 * vx, (p1y + s * d1y) - k1 * vy, (p1z + s * d1z) - k1 * vz);
+  point2 = Eigen::Vector3d((p3x + t * d2x) + k2 * vx, (p3y + t * d2y) + k2 * vy, (p3z + t * d2z) + k2 * vz);
   distance = dist;
   return true;
 }
@@ -366,6 +395,50 @@ inline int invalidOutputs(int code, double& distance, Eigen::Vector3d& point1, E
   distance = kNaN;
   point1 = Eigen::Vector3d::Constant(kNaN);
   point2 = Eigen::Vector3d::Constant(kNaN);
+  return code;
+}
+
+/**
+ * capsulePair() for any finite magnitude: when a coordinate exceeds 2^200 (~1.6e60 m) in
+ * magnitude, its products (a e, |d1 x d2|^2 ~ length^4) could overflow, so the inputs are
+ * scaled by a power of two (exact) to magnitudes below 1, solved, and the distance and points
+ * scaled back (the problem is homogeneous; the normal is scale-free). A result that is not
+ * representable (distance beyond ~1.8e308) becomes non-finite and is then rejected as invalid
+ * input. Non-finite inputs are passed through unchanged (capsulePair() propagates them).
+ */
+int capsulePairAnyScale(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1, const Eigen::Vector3d& p3,
+                        const Eigen::Vector3d& p4, double r2, double& distance, Eigen::Vector3d& point1,
+                        Eigen::Vector3d& point2, Eigen::Vector3d& normal)
+{
+  const double mag = std::max(std::max(p1.cwiseAbs().maxCoeff(), p2.cwiseAbs().maxCoeff()),
+                              std::max(p3.cwiseAbs().maxCoeff(), p4.cwiseAbs().maxCoeff()));
+  constexpr double kLarge = 0x1p200;
+  if (!(mag > kLarge) || !(mag < std::numeric_limits<double>::infinity()))
+    return capsulePair(p1, p2, r1, p3, p4, r2, distance, point1, point2, normal);
+  const int k = std::ilogb(mag) + 1;  // mag * 2^-k < 1
+  const double down = std::ldexp(1.0, -k), up = std::ldexp(1.0, k);
+  const int code = capsulePair(p1 * down, p2 * down, r1 * down, p3 * down, p4 * down, r2 * down, distance, point1,
+                               point2, normal);
+  distance *= up;
+  point1 *= up;
+  point2 *= up;
+  return code;
+}
+
+/// dist_capsule_to_capsule() outside the general case (capsulePair(), then the input check).
+/// Kept out of line so that the general case does not keep the inputs alive in registers or
+/// on the stack for it.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+int capsuleCapsuleCareful(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2, const Eigen::Vector3d& P3,
+                          const Eigen::Vector3d& P4, double r1, double r2, double& distance,
+                          Eigen::Vector3d& point1, Eigen::Vector3d& point2)
+{
+  Eigen::Vector3d normal;
+  const int code = capsulePairAnyScale(P1, P2, r1, P3, P4, r2, distance, point1, point2, normal);
+  if (!capsulePairValid(distance, r1, r2))
+    return invalidOutputs(kInvalidInput, distance, point1, point2);
   return code;
 }
 
@@ -475,7 +548,7 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
   if (capsulePairFast(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal))
     out.code = classify(out.distance);
   else
-    out.code = capsulePair(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal);
+    out.code = capsulePairAnyScale(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal);
   if (!capsulePairValid(out.distance, r1, r2))
     return invalid(kInvalidInput);
   return out;
@@ -651,15 +724,12 @@ int dist_capsule_to_capsule(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2
                             Eigen::Vector3d& point_on_capsule1, Eigen::Vector3d& point_on_capsule2)
 {
   // Inputs are checked after the computation (see capsulePairValid), off the critical path.
-  Eigen::Vector3d normal;
-  int code;
-  if (capsulePairFast(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal))
-    code = classify(distance);
-  else
-    code = capsulePair(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal);
+  Eigen::Vector3d normal;  // not an output of this signature
+  if (!capsulePairFast(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal))
+    return capsuleCapsuleCareful(P1, P2, P3, P4, r1, r2, distance, point_on_capsule1, point_on_capsule2);
   if (!capsulePairValid(distance, r1, r2))
     return invalidOutputs(kInvalidInput, distance, point_on_capsule1, point_on_capsule2);
-  return code;
+  return classify(distance);
 }
 
 // The box is validated (branch-free fast path) and its frame built on every call; the query is
@@ -688,9 +758,15 @@ int dist_capsule_to_parallelepiped(const Eigen::Vector3d& p1, const Eigen::Vecto
 // edges are u_i / |e_i|^2 in [0, 1] inside the box; the closest box point clamps u_i to
 // [0, |e_i|^2] (Ericson 5.1.4), and s minus it is sum_i (u_i - clamp(u_i)) / |e_i|^2 e_i.
 // Only a centre inside the box needs the edge lengths (depth to the nearest face).
-int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
-                                  double& distance, Eigen::Vector3d& point_on_sphere,
-                                  Eigen::Vector3d& point_on_parall)
+namespace
+{
+/// dist_sphere_to_parallelepiped() in every case (invalid input, invalid box, centre inside or
+/// on the box), out of line: the common case below does not keep its values alive.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r, double& distance,
+                     Eigen::Vector3d& point_on_sphere, Eigen::Vector3d& point_on_parall)
 {
   if (vertices == nullptr || !std::isfinite(s.sum() + r) || !(r >= 0.0))
     return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
@@ -708,6 +784,9 @@ int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3
   const double ix = 1.0 / e.lx2, iy = 1.0 / e.ly2, iz = 1.0 / e.lz2;
   const Eigen::Vector3d off = ((ux - cx) * ix) * e.ex + ((uy - cy) * iy) * e.ey + ((uz - cz) * iz) * e.ez;
   const double axis2 = off.squaredNorm();
+  // Squared distance overflowed (centre beyond ~1e154 m from the box): not a number to use.
+  if (!(axis2 < std::numeric_limits<double>::infinity()))
+    return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
   if (axis2 > kMinAxis2)  // centre outside the box (by more than 1e-100 m)
   {
     const double axis = std::sqrt(axis2);
@@ -742,6 +821,47 @@ int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3
   point_on_sphere = s;
   point_on_parall = s + ((1.0 - surfaceFactor(distance)) * depth) * normal;  // tangent: s
   return classify(distance);
+}
+
+}  // namespace
+
+// Common case (valid inputs and box, centre outside the box) with one predictable branch; the
+// box test and the projection are independent, so they overlap. Everything else is
+// sphereBoxCareful(), which recomputes from the inputs.
+int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
+                                  double& distance, Eigen::Vector3d& point_on_sphere,
+                                  Eigen::Vector3d& point_on_parall)
+{
+  if (vertices == nullptr)
+    return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
+  BoxEdges e;
+  boxEdges(vertices, e);
+  const Eigen::Vector3d w = s - vertices[0];
+  const double ux = w.dot(e.ex), uy = w.dot(e.ey), uz = w.dot(e.ez);
+  const double cx = minD(maxD(ux, 0.0), e.lx2);
+  const double cy = minD(maxD(uy, 0.0), e.ly2);
+  const double cz = minD(maxD(uz, 0.0), e.lz2);
+  const double ix = 1.0 / e.lx2, iy = 1.0 / e.ly2, iz = 1.0 / e.lz2;
+  const Eigen::Vector3d off = ((ux - cx) * ix) * e.ex + ((uy - cy) * iy) * e.ey + ((uz - cz) * iz) * e.ez;
+  const double axis2 = off.squaredNorm();
+  // The rest of the box test after the projection (fewer values alive at once). Each test is
+  // false on NaN. A non-finite centre coordinate s_j makes axis2 NaN: every u_i is NaN or
+  // +-inf (w.e_i with w_j infinite: inf * 0 = NaN when e_ij = 0), so is u_i - c_i (c_i is
+  // finite), and a component k != j of off sums +-inf terms of both signs (the products
+  // e_ij e_ik of orthogonal edges have both signs), inf - inf = NaN (gtest
+  // Box.FastValidationRejectsEveryBadVertexWithItsCode sets each coordinate to NaN / +-inf).
+  // axis2 < inf also sends an overflow (centre beyond ~1e154 m) to the out-of-line path.
+  const bool box_ok = boxShapePasses(vertices, e, kBoxRelativeTolerance * kBoxRelativeTolerance);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (!(box_ok & (axis2 > kMinAxis2) & (axis2 < kInf) & (r >= 0.0) & (r < kInf)))
+    return sphereBoxCareful(s, vertices, r, distance, point_on_sphere, point_on_parall);
+  const double axis = std::sqrt(axis2);
+  const double dist = axis - r;
+  const double scale = surfaceFactor(dist) * r * (axis * (1.0 / axis2));  // division overlaps the sqrt
+  distance = dist;
+  point_on_parall = s - off;
+  point_on_sphere = s - scale * off;
+  return classify(dist);
 }
 
 }  // namespace saras_collision

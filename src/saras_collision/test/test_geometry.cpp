@@ -431,6 +431,112 @@ TEST(CapsuleCapsule, ExactOnBothSidesOfTheFastPathAngle)
   EXPECT_GT(checked, 3900);
 }
 
+// Every clamping region of the general-case path (t interior / clamped to 0 / to 1, s interior
+// or clamped, the re-optimisation of s after t is clamped), each with the segments in both
+// directions and the capsules in both orders: exact closed forms, points on the surfaces.
+TEST(CapsuleCapsule, EveryClampingRegionClosedForm)
+{
+  struct Case
+  {
+    Vector3d p3, p4, q1, q2;  // second axis; expected closest axis points
+  };
+  // First axis: x from -1 to 1 (y = z = 0); the second axis is never parallel to it.
+  const Vector3d p1(-1, 0, 0), p2(1, 0, 0);
+  const Case cases[] = {
+    { Vector3d(0, -1, 1), Vector3d(0, 1, 1), Vector3d(0, 0, 0), Vector3d(0, 0, 1) },         // both interior
+    { Vector3d(0, 2, 1), Vector3d(0, 3, 1), Vector3d(0, 0, 0), Vector3d(0, 2, 1) },          // t = 0, s re-optimised
+    { Vector3d(0, -3, 1), Vector3d(0, -2, 1), Vector3d(0, 0, 0), Vector3d(0, -2, 1) },       // t = 1, s re-optimised
+    { Vector3d(3, -1, 1), Vector3d(3, 1, 1), Vector3d(1, 0, 0), Vector3d(3, 0, 1) },         // s = 1, t interior
+    { Vector3d(-3, -1, -1), Vector3d(-3, 1, -1), Vector3d(-1, 0, 0), Vector3d(-3, 0, -1) },  // s = 0, t interior
+    { Vector3d(3, 2, 1), Vector3d(3, 3, 1), Vector3d(1, 0, 0), Vector3d(3, 2, 1) },          // s = 1, t = 0
+    { Vector3d(0.5, 2, 1), Vector3d(2.5, 3, 1), Vector3d(0.5, 0, 0), Vector3d(0.5, 2, 1) },  // t = 0, oblique
+    { Vector3d(3, 2, 1), Vector3d(5, 0.5, 1), Vector3d(1, 0, 0), Vector3d(3, 2, 1) },        // both clamped, oblique
+  };
+  const double r1 = 0.25, r2 = 0.125;
+  int k = 0;
+  for (const Case& c : cases)
+  {
+    const double axis = (c.q2 - c.q1).norm();
+    const Vector3d n = (c.q2 - c.q1) / axis;  // from capsule 1 to capsule 2
+    ASSERT_NEAR(segmentSegmentRef(p1, p2, c.p3, c.p4), axis, 1e-15) << k;  // the case itself is right
+    for (int variant = 0; variant < 8; ++variant, ++k)
+    {
+      Vector3d a1 = p1, a2 = p2, b1 = c.p3, b2 = c.p4;
+      if (variant & 1)
+        std::swap(a1, a2);
+      if (variant & 2)
+        std::swap(b1, b2);
+      const bool swapped = (variant & 4) != 0;
+      double d;
+      Vector3d a, b;
+      const int code = swapped ? saras_collision::dist_capsule_to_capsule(b1, b2, a1, a2, r2, r1, d, b, a) :
+                                 saras_collision::dist_capsule_to_capsule(a1, a2, b1, b2, r1, r2, d, a, b);
+      EXPECT_EQ(code, saras_collision::kSeparated) << k;
+      EXPECT_NEAR(d, axis - r1 - r2, 1e-15) << k;
+      EXPECT_LE((a - (c.q1 + r1 * n)).norm(), 1e-15) << k << ": " << a.transpose();
+      EXPECT_LE((b - (c.q2 - r2 * n)).norm(), 1e-15) << k << ": " << b.transpose();
+    }
+  }
+}
+
+// The general-case path requires its products (a e |d1 x d2|^2 and the scaled axis difference
+// squared) to be normal numbers and falls back to the careful path otherwise, which rescales
+// inputs beyond 2^200 m by a power of two: the result is the same, scaled, from 1e-12 to
+// 1e300 (the general path runs up to ~1e25, the careful one above, rescaled above 1.6e60),
+// and a distance that is not representable is kInvalidInput, never a wrong number.
+TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
+{
+  Random rnd;
+  int checked = 0;
+  for (int k = 0; k < 300; ++k)
+  {
+    Vector3d p1, p2, p3, p4;
+    rnd.segment(p1, p2, 0.04);
+    rnd.segment(p3, p4, 0.04);
+    if (k % 10 == 0)  // parallel pairs: careful path at every scale
+      p4 = p3 + (p2 - p1) * rnd.uniform(-1.5, 1.5);
+    const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    double d;
+    Vector3d a, b;
+    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
+    ASSERT_NEAR(d, segmentSegmentRef(p1, p2, p3, p4) - r1 - r2, 1e-12) << k;
+    for (double scale : { 1e-12, 1e-6, 1e-3, 1e3, 1e12, 1e25, 1e30, 1e60, 1e75, 1e100, 1e150, 1e160, 1e300 })
+    {
+      double ds;
+      Vector3d as, bs;
+      const int code_s = saras_collision::dist_capsule_to_capsule(p1 * scale, p2 * scale, p3 * scale, p4 * scale,
+                                                                  r1 * scale, r2 * scale, ds, as, bs);
+      const saras_collision::DistanceResult full =
+          saras_collision::capsuleCapsule(p1 * scale, p2 * scale, r1 * scale, p3 * scale, p4 * scale, r2 * scale);
+      ASSERT_TRUE(saras_collision::isValidCode(code_s)) << k << " scale " << scale;
+      ASSERT_EQ(full.code, code_s) << k << " scale " << scale;
+      ASSERT_EQ(full.distance, ds) << k << " scale " << scale;
+      ASSERT_NEAR(ds / scale, d, 1e-13) << k << " scale " << scale;
+      if (code != saras_collision::kIntersecting && code_s != saras_collision::kIntersecting)
+      {
+        ASSERT_LE((as / scale - a).norm(), 1e-13) << k << " scale " << scale;
+        ASSERT_LE((bs / scale - b).norm(), 1e-13) << k << " scale " << scale;
+      }
+      if (std::abs(ds) > 1e-9 && std::abs(d) > 1e-9)  // codes away from the 1 nm tangent band
+      {
+        ASSERT_EQ(code_s == saras_collision::kIntersecting, code == saras_collision::kIntersecting) << k;
+        ASSERT_EQ(code_s == saras_collision::kParallel, code == saras_collision::kParallel) << k;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 300 * 13);
+  // Finite inputs whose distance is not representable (> 1.8e308 m): an error code, not a number.
+  double d;
+  Vector3d a, b;
+  const double big = 1.5e308;
+  EXPECT_EQ(saras_collision::dist_capsule_to_capsule(Vector3d(-big, -big, 0), Vector3d(-big, -big, 1),
+                                                     Vector3d(big, big, 0), Vector3d(big, big + 1, 0), 0.0, 0.0, d, a,
+                                                     b),
+            saras_collision::kInvalidInput);
+  EXPECT_TRUE(std::isnan(d));
+}
+
 // ===================================================================== boxes
 TEST(Box, VertexOrderAndValidation)
 {
@@ -932,6 +1038,128 @@ TEST(Box, FastValidationRejectsEveryBadVertexWithItsCode)
     EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(s, s2, v, bad, d, a, b), saras_collision::kInvalidInput);
   }
   EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s, v, -1e-12, d, a, b), saras_collision::kInvalidInput);
+  // A finite centre so far away that the squared distance overflows: an error code, never an
+  // infinite (overstated) distance; just below, the exact distance.
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(Vector3d(1e160, 0, 0), v, 0.001, d, a, b),
+            saras_collision::kInvalidInput);
+  EXPECT_TRUE(allNaN(d, a, b));
+  const Vector3d far(1e150, 0, 0);
+  EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(far, v, 0.001, d, a, b), saras_collision::kSeparated);
+  EXPECT_NEAR(d / 1e150, 1.0, 1e-12);
+}
+
+// Each box condition just below / just above its threshold (relative 1e-3 either side), for
+// the sphere centre outside the box (common path) and inside it (out-of-line path), the capsule
+// and makeBox: the same verdict everywhere.
+//  - vertex residual: v6 moved by (1 -+ 1e-3) rt diag (only the residual v6 - v5 - z changes);
+//  - rectangularity: the y edges sheared by an angle (1 -+ 1e-3) rt (cosine sum = sin^2);
+//  - flatness: the z edge (1 +- 1e-3) rt |(x, y)| long (|z|^2 > rt^2 diag^2).
+TEST(Box, EveryConditionJustInsideAndJustOutsideItsTolerance)
+{
+  const double rt = saras_collision::kBoxRelativeTolerance;
+  const double lx = 0.03, ly = 0.05, lz = 0.02;
+  Vector3d v[8];
+  aabbVertices(Vector3d(0, 0, 0), Vector3d(lx, ly, lz), v);
+  const Eigen::Matrix3d rot = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Vector3d shift(0.1, -0.2, 0.05);
+  auto place = [&](Vector3d w[8]) {
+    for (int i = 0; i < 8; ++i)
+      w[i] = rot * w[i] + shift;
+  };
+  const Vector3d outside = rot * Vector3d(0.05, 0.02, 0.01) + shift;
+  int checked = 0;
+  for (double side : { -1.0, 1.0 })  // -1: just inside the tolerance, +1: just outside
+  {
+    const double f = 1.0 + side * 1e-3;
+    Vector3d residual[8], shear[8], flat[8];
+    std::copy(v, v + 8, residual);
+    residual[6] += Vector3d(0.3, -0.5, 0.8).normalized() * (f * rt * std::sqrt(lx * lx + ly * ly + lz * lz));
+    std::copy(v, v + 8, shear);
+    const double angle = std::asin(f * rt);
+    for (int i : { 4, 5, 6, 7 })  // y edges turned towards x by the angle, same length
+      shear[i] += Vector3d(ly * std::sin(angle), ly * (std::cos(angle) - 1.0), 0.0);
+    // z edge length l with l^2 = rt^2 (lx^2 + ly^2 + l^2) at f = 1.
+    const double lz_min = rt * std::sqrt((lx * lx + ly * ly) / (1.0 - rt * rt)) / f;
+    aabbVertices(Vector3d(0, 0, 0), Vector3d(lx, ly, lz_min), flat);
+    for (Vector3d* w : { residual, shear, flat })
+    {
+      place(w);
+      const int expected = side < 0 ? saras_collision::kSeparated : saras_collision::kInvalidBox;
+      Vector3d inside = Vector3d::Zero();  // the centroid
+      for (int i = 0; i < 8; ++i)
+        inside += w[i] / 8.0;
+      OrientedBox box;
+      EXPECT_EQ(saras_collision::makeBox(w, rt, box), expected) << checked;
+      double d;
+      Vector3d a, b;
+      const int out_code = saras_collision::dist_sphere_to_parallelepiped(outside, w, 0.001, d, a, b);
+      EXPECT_EQ(out_code, expected == saras_collision::kSeparated ? saras_collision::kSeparated : expected) << checked;
+      EXPECT_EQ(std::isnan(d), expected != saras_collision::kSeparated) << checked;
+      const int in_code = saras_collision::dist_sphere_to_parallelepiped(inside, w, 0.001, d, a, b);
+      EXPECT_EQ(in_code, expected == saras_collision::kSeparated ? saras_collision::kIntersecting : expected)
+          << checked;
+      EXPECT_EQ(std::isnan(d), expected != saras_collision::kSeparated) << checked;
+      EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(outside, inside, w, 0.001, d, a, b),
+                expected == saras_collision::kSeparated ? saras_collision::kIntersecting : expected)
+          << checked;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 6);
+}
+
+// The vertex-frame sphere-box hands the centre inside / on the box and every invalid input to
+// an out-of-line path: both sides of that switch (centre 1e-90 .. 1e-110 m outside a face,
+// on it, 1e-12 m inside) and invalid inputs with the centre inside give the same results as
+// the prebuilt-box path and the same error codes as with the centre outside.
+TEST(SphereBox, CommonAndOutOfLinePathsAgreeAtTheSwitch)
+{
+  Random rnd;
+  rnd.gen.seed(777);
+  for (int k = 0; k < 50; ++k)
+  {
+    const OrientedBox box = rnd.box();
+    Vector3d v[8];
+    saras_collision::boxVertices(box, v);
+    const int face = k % 3;
+    const double sign = k % 2 == 0 ? 1.0 : -1.0;
+    for (double delta : { 1e-90, 1e-99, 1e-100, 1e-101, 1e-110, 0.0, -1e-12 })
+    {
+      Vector3d local(rnd.uniform(-0.5, 0.5) * box.half.x(), rnd.uniform(-0.5, 0.5) * box.half.y(),
+                     rnd.uniform(-0.5, 0.5) * box.half.z());
+      local[face] = sign * (box.half[face] + delta);
+      const Vector3d s = box.center + box.axes * local;
+      const double r = 0.002;
+      double d;
+      Vector3d a, b;
+      const int code = saras_collision::dist_sphere_to_parallelepiped(s, v, r, d, a, b);
+      const saras_collision::DistanceResult ref = saras_collision::capsuleBox(s, s, r, box);
+      ASSERT_EQ(code, ref.code) << k << " delta " << delta;
+      ASSERT_NEAR(d, ref.distance, 1e-15) << k << " delta " << delta;
+      ASSERT_NEAR(d, pointBoxSigned(s, box) - r, 1e-15) << k << " delta " << delta;
+      ASSERT_NEAR((a - ref.point1).norm(), 0.0, 1e-15) << k << " delta " << delta;
+      ASSERT_NEAR((b - ref.point2).norm(), 0.0, 1e-15) << k << " delta " << delta;
+      ASSERT_EQ(code, saras_collision::kIntersecting) << k;  // r = 2 mm: always overlapping
+    }
+    // Invalid inputs with the centre inside: the same codes as outside, NaN outputs.
+    const Vector3d s_in = box.center;
+    double d;
+    Vector3d a, b;
+    Vector3d w[8];
+    std::copy(v, v + 8, w);
+    w[5][1] += 1e-4;
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s_in, w, 0.001, d, a, b), saras_collision::kInvalidBox);
+    EXPECT_TRUE(allNaN(d, a, b));
+    w[5][1] = kNaN;
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s_in, w, 0.001, d, a, b), saras_collision::kInvalidInput);
+    EXPECT_TRUE(allNaN(d, a, b));
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s_in, v, -0.001, d, a, b), saras_collision::kInvalidInput);
+    EXPECT_TRUE(allNaN(d, a, b));
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s_in, v, kInf, d, a, b), saras_collision::kInvalidInput);
+    EXPECT_TRUE(allNaN(d, a, b));
+    EXPECT_EQ(saras_collision::dist_sphere_to_parallelepiped(s_in, nullptr, 0.001, d, a, b),
+              saras_collision::kInvalidInput);
+  }
 }
 
 TEST(SphereBox, VertexFramePathEqualsPrebuiltBoxPath)

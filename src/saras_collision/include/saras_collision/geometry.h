@@ -30,7 +30,10 @@
  *  - kParallel (2): capsule-capsule only, separated and with parallel axes; the distance and
  *    (one pair of) closest points are valid as for kSeparated.
  *  - kInvalidBox (-2): the 8 vertices are not a rectangular box in the order above.
- *  - kInvalidInput (-3): a NaN/infinite coordinate or a negative/non-finite radius.
+ *  - kInvalidInput (-3): a NaN/infinite coordinate or a negative/non-finite radius (also: finite
+ *    capsule-capsule inputs whose distance is not representable, beyond ~1.8e308 m, and a
+ *    dist_sphere_to_parallelepiped() centre beyond ~1e154 m from the box, whose squared
+ *    distance overflows).
  *  On an error code the distance and points are set to NaN: never use them as a number.
  */
 #ifndef SARAS_COLLISION_GEOMETRY_H
