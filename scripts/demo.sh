@@ -63,7 +63,7 @@ sleep 1
 
 capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
 vf_start=$(( DURATION > 12 ? 2 : 0 ))
-for ((t = 0; t < capture_at; t++)); do
+for ((t = 0; t < DURATION; t++)); do
   if [ $t -eq $vf_start ]; then
     # augmented stereo stream for the report: last pair + which warning colours occurred
     rosrun saras_visual_feedback visual_feedback_snapshot _output:="$REPORT/augmented_stereo" \
@@ -77,17 +77,17 @@ for ((t = 0; t < capture_at; t++)); do
   fi
 done
 
-echo "demo: capturing the parameters and the node graph"
-rosparam dump "$OUT/params.yaml" 2>/dev/null || true
-python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
-sleep $(( DURATION - capture_at ))
-
 [ -n "${snap_pid:-}" ] && wait "$snap_pid"
 colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
 echo "demo: visual feedback: $colours"
-echo "demo: stopping the recording and the platform"
+echo "demo: stopping the recording"
 kill -INT "$record_pid" 2>/dev/null
 for ((t = 0; t < 20; t++)); do kill -0 "$record_pid" 2>/dev/null || break; sleep 0.5; done
+# after the recording: querying ~35 nodes over XML-RPC stalls the 2-core host for seconds
+echo "demo: capturing the parameters and the node graph"
+rosparam dump "$OUT/params.yaml" 2>/dev/null || true
+python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
+echo "demo: stopping the platform"
 kill -INT "$launch_pid" 2>/dev/null
 for ((t = 0; t < 40; t++)); do kill -0 "$launch_pid" 2>/dev/null || break; sleep 0.5; done
 kill -0 "$launch_pid" 2>/dev/null && { echo "demo: roslaunch did not stop, terminating"; kill -TERM "$launch_pid"; }

@@ -7,7 +7,10 @@ moves all the time, 1e6 = still) and ``endoscope.launch width height fps``, subs
 no deserialisation in the benchmark) to left/right ``image_raw`` and ``image_raw/compressed`` as
 a viewer + recorder would, and after ``--warmup`` s measures for ``--duration`` s the message
 rate of each of the 4 topics and the CPU of the endoscope_sim process (% of one core, /proc).
+Each case runs for every renderer of ``--renderers`` (endoscope.launch ``renderer``: cpp = the
+compiled nodelet in endoscope_sim_node, python = the rospy endoscope_sim), in the same run.
 Usage: endoscope_node.py [--duration S] [--warmup S] [--cases 720p30m,1080p30m,...] [--raw-only]
+                         [--renderers cpp,python]
 Case names: <height>p<fps><m|s> (m = ECM moving, s = still). Needs the workspace built
 (scripts/env.sh: saras_drivers, saras_msgs; saras_collision for the bone boxes).
 """
@@ -34,6 +37,7 @@ LAUNCH = """<launch>
     <arg name="width" value="{width}"/>
     <arg name="height" value="{height}"/>
     <arg name="fps" value="{fps}"/>
+    <arg name="renderer" value="{renderer}"/>
   </include>
 </launch>
 """
@@ -64,7 +68,7 @@ def parse_case(c):
     return int(c[:p]), float(c[p + 1:-1]), c[-1] == 'm'
 
 
-def run_case(height, fps, moving, args):
+def run_case(height, fps, moving, renderer, args):
     import rospy
     from rospy.msg import AnyMsg
     width, height = SIZES[height]
@@ -75,7 +79,7 @@ def run_case(height, fps, moving, args):
     fd, path = tempfile.mkstemp(suffix='.launch')
     with os.fdopen(fd, 'w') as f:
         f.write(LAUNCH.format(width=width, height=height, fps=fps, dwell=0.0 if moving else 1e6,
-                            frames=os.path.normpath(FRAMES)))
+                              frames=os.path.normpath(FRAMES), renderer=renderer))
     try:
         procs.append(subprocess.Popen(['roscore', '-p', str(port)], env=env, preexec_fn=os.setsid,
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
@@ -127,11 +131,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--duration', type=float, default=10.0)
     ap.add_argument('--warmup', type=float, default=3.0)
-    ap.add_argument('--cases', default='720p30m,720p30s,1080p30m,720p60m,1080p60m')
+    ap.add_argument('--cases', default='720p30m,720p30s,1080p30m,1080p30s,720p60m,720p60s,1080p60m,1080p60s')
+    ap.add_argument('--renderers', default='cpp,python')
     ap.add_argument('--raw-only', action='store_true', help='no compressed subscribers')
     args = ap.parse_args()
     rows = []
-    for c in args.cases.split(','):
+    for c, renderer in [(c, rd) for c in args.cases.split(',') for rd in args.renderers.split(',')]:
         height, fps, moving = parse_case(c)
         # rospy allows one init_node per process: every case runs in a child process
         r, w = os.pipe()
@@ -139,7 +144,7 @@ def main():
         if pid == 0:
             os.close(r)
             try:
-                res = run_case(height, fps, moving, args)
+                res = run_case(height, fps, moving, renderer, args)
                 os.write(w, repr(res).encode())
             finally:
                 os._exit(0)
@@ -152,23 +157,23 @@ def main():
             data += chunk
         os.waitpid(pid, 0)
         if not data:
-            print('case %s failed' % c, file=sys.stderr)
+            print('case %s %s failed' % (c, renderer), file=sys.stderr)
             continue
         rates, cpu, l0, l1 = eval(data.decode())   # our own repr of floats
-        rows.append((c, SIZES[height], fps, moving, rates, cpu, l0, l1))
-        print('done %s' % c, file=sys.stderr)
-    print('\n| case | ECM | target fps | image_raw L / R [Hz] | compressed L / R [Hz] | '
+        rows.append((c, renderer, SIZES[height], fps, moving, rates, cpu, l0, l1))
+        print('done %s %s' % (c, renderer), file=sys.stderr)
+    print('\n| renderer | case | ECM | target fps | image_raw L / R [Hz] | compressed L / R [Hz] | '
           'endoscope_sim CPU [% of one core] | CPU per stereo frame [ms] | load avg before -> after |')
-    print('|---|---|---|---|---|---|---|---|')
-    for c, (w, h), fps, moving, rates, cpu, l0, l1 in rows:
+    print('|---|---|---|---|---|---|---|---|---|')
+    for c, renderer, (w, h), fps, moving, rates, cpu, l0, l1 in rows:
         comp = '%.1f / %.1f' % (rates[2], rates[3]) if len(rates) > 2 else '-'
         per_frame = 10.0 * cpu / rates[0] if rates[0] > 0 else float('nan')
-        print('| %dx%d | %s | %g | %.1f / %.1f | %s | %.0f | %.0f | %.2f -> %.2f |' % (
-            w, h, 'moving' if moving else 'still', fps, rates[0], rates[1], comp, cpu, per_frame,
-            l0, l1))
+        print('| %s | %dx%d | %s | %g | %.1f / %.1f | %s | %.0f | %.1f | %.2f -> %.2f |' % (
+            renderer, w, h, 'moving' if moving else 'still', fps, rates[0], rates[1], comp, cpu,
+            per_frame, l0, l1))
     print('\n%d s windows after %g s warm-up; subscribers take image_raw and compressed of both '
           'eyes (AnyMsg)%s. CPU per stereo frame = node CPU time / left image_raw count (includes '
-          'rendering, JPEG, rospy publishing and the TF listener); the rate is CPU-bound when the '
+          'rendering, JPEG, publishing and the TF listener); the rate is CPU-bound when the '
           'host is loaded.' % (args.duration, args.warmup, ' (raw only)' if args.raw_only else ''))
 
 

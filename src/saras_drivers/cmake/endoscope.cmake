@@ -1,1 +1,56 @@
 # Build rules of the C++ endoscope component (owned by its engineer); included from CMakeLists.txt.
+#   saras_drivers_endoscope_core     ROS-agnostic core: camera model (camera_calibration YAML),
+#                                    tissue / bones / targets, ray-casting renderer
+#   saras_drivers_endoscope_nodelet  nodelet saras_drivers/EndoscopeSim (nodelet_plugins.xml)
+#   endoscope_sim_node               thin node executable that loads the nodelet in-process
+#   endoscope_render                 CLI: one frame of the core (Python comparison, timing)
+find_package(OpenCV REQUIRED COMPONENTS core imgproc imgcodecs calib3d aruco)
+find_package(Threads REQUIRED)
+
+add_library(${PROJECT_NAME}_endoscope_core
+  src/endoscope/endoscope_camera.cpp
+  src/endoscope/endoscope_renderer.cpp
+  src/endoscope/endoscope_scene.cpp)
+target_include_directories(${PROJECT_NAME}_endoscope_core PUBLIC include)
+target_include_directories(${PROJECT_NAME}_endoscope_core SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
+target_compile_options(${PROJECT_NAME}_endoscope_core PRIVATE -Wall -Wextra -O3)
+
+add_library(${PROJECT_NAME}_endoscope_nodelet src/endoscope/endoscope_sim_nodelet.cpp)
+target_include_directories(${PROJECT_NAME}_endoscope_nodelet SYSTEM PRIVATE ${catkin_INCLUDE_DIRS} ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_endoscope_nodelet ${PROJECT_NAME}_endoscope_core ${catkin_LIBRARIES}
+  ${OpenCV_LIBRARIES} Threads::Threads)
+target_compile_options(${PROJECT_NAME}_endoscope_nodelet PRIVATE -Wall -Wextra)
+add_dependencies(${PROJECT_NAME}_endoscope_nodelet ${catkin_EXPORTED_TARGETS})
+
+add_executable(${PROJECT_NAME}_endoscope_sim_node src/nodelet_node_main.cpp)
+set_target_properties(${PROJECT_NAME}_endoscope_sim_node PROPERTIES OUTPUT_NAME endoscope_sim_node)
+target_compile_definitions(${PROJECT_NAME}_endoscope_sim_node PRIVATE SARAS_NODE_NAME="endoscope_sim"
+  SARAS_NODELET_TYPE="${PROJECT_NAME}/EndoscopeSim" SARAS_NODE_WHAT="the endoscope simulator")
+target_include_directories(${PROJECT_NAME}_endoscope_sim_node SYSTEM PRIVATE ${catkin_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_endoscope_sim_node ${catkin_LIBRARIES})
+# the executable loads the nodelet through pluginlib: build it first
+add_dependencies(${PROJECT_NAME}_endoscope_sim_node ${PROJECT_NAME}_endoscope_nodelet)
+
+add_executable(${PROJECT_NAME}_endoscope_render src/endoscope/endoscope_render_cli.cpp)
+set_target_properties(${PROJECT_NAME}_endoscope_render PROPERTIES OUTPUT_NAME endoscope_render)
+target_include_directories(${PROJECT_NAME}_endoscope_render SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_endoscope_render ${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
+
+install(TARGETS ${PROJECT_NAME}_endoscope_core ${PROJECT_NAME}_endoscope_nodelet
+  ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
+  RUNTIME DESTINATION ${CATKIN_GLOBAL_BIN_DESTINATION})
+install(TARGETS ${PROJECT_NAME}_endoscope_render ${PROJECT_NAME}_endoscope_sim_node
+  RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+install(DIRECTORY include/${PROJECT_NAME}/
+  DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION}
+  FILES_MATCHING PATTERN "endoscope_*.h")
+
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(${PROJECT_NAME}_endoscope_test test/endoscope/test_endoscope_core.cpp)
+  target_compile_definitions(${PROJECT_NAME}_endoscope_test PRIVATE
+    ENDOSCOPE_TEST_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config")
+  target_include_directories(${PROJECT_NAME}_endoscope_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
+  target_link_libraries(${PROJECT_NAME}_endoscope_test ${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
+endif()

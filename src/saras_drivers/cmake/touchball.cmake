@@ -20,8 +20,10 @@ target_link_libraries(${PROJECT_NAME}_touchball_nodelet ${PROJECT_NAME}_touchbal
 target_compile_options(${PROJECT_NAME}_touchball_nodelet PRIVATE -Wall -Wextra)
 add_dependencies(${PROJECT_NAME}_touchball_nodelet ${catkin_EXPORTED_TARGETS})
 
-add_executable(${PROJECT_NAME}_touchball_receiver src/touchball/touchball_receiver_node.cpp)
+add_executable(${PROJECT_NAME}_touchball_receiver src/nodelet_node_main.cpp)
 set_target_properties(${PROJECT_NAME}_touchball_receiver PROPERTIES OUTPUT_NAME touchball_receiver)
+target_compile_definitions(${PROJECT_NAME}_touchball_receiver PRIVATE SARAS_NODE_NAME="touchball_receiver"
+  SARAS_NODELET_TYPE="${PROJECT_NAME}/TouchballReceiver" SARAS_NODE_WHAT="the Touchball receiver")
 target_include_directories(${PROJECT_NAME}_touchball_receiver SYSTEM PRIVATE ${catkin_INCLUDE_DIRS})
 target_link_libraries(${PROJECT_NAME}_touchball_receiver ${catkin_LIBRARIES})
 # the executable loads the nodelet through pluginlib: build it first

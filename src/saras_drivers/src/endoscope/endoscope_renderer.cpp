@@ -1,0 +1,644 @@
+/**
+ * @file endoscope_renderer.cpp
+ * @brief SceneRenderer: cached static layer (tissue, bones, target) + per-frame shafts.
+ */
+#include "saras_drivers/endoscope_renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+namespace saras_drivers
+{
+namespace endoscope
+{
+namespace
+{
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Bilinear sample of a CV_32F map with clamped (replicated) borders at texel coordinates (x, y).
+inline float sampleClamp(const float* m, int n, float x, float y)
+{
+  x = std::min(std::max(x, 0.f), float(n - 1));
+  y = std::min(std::max(y, 0.f), float(n - 1));
+  const int i0 = std::min(int(x), n - 2), j0 = std::min(int(y), n - 2);
+  const float a = x - i0, b = y - j0;
+  const float* r0 = m + size_t(j0) * n + i0;
+  const float* r1 = r0 + n;
+  return (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
+}
+
+inline Eigen::Vector3f sampleClamp3(const cv::Vec3f* m, int n, float x, float y)
+{
+  x = std::min(std::max(x, 0.f), float(n - 1));
+  y = std::min(std::max(y, 0.f), float(n - 1));
+  const int i0 = std::min(int(x), n - 2), j0 = std::min(int(y), n - 2);
+  const float a = x - i0, b = y - j0;
+  const cv::Vec3f* r0 = m + size_t(j0) * n + i0;
+  const cv::Vec3f* r1 = r0 + n;
+  const cv::Vec3f v = (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
+  return Eigen::Vector3f(v[0], v[1], v[2]);
+}
+}  // namespace
+
+std::pair<int, int> tissueGridSteps(int width)
+{
+  const int colour = std::max(2, static_cast<int>(std::nearbyint(2.0 * width / 1280.0)));
+  return { 2 * colour, colour };
+}
+
+SceneRenderer::SceneRenderer(const CameraModel& camera, const TissueSurface& surface, const RendererOptions& options)
+  : cam_(camera), surface_(surface), opt_(options)
+{
+  const auto steps = tissueGridSteps(cam_.width());
+  colour_step_ = opt_.colour_subsample > 0 ? opt_.colour_subsample : steps.second;
+  tissue_step_ = opt_.tissue_subsample > 0 ? opt_.tissue_subsample : 2 * colour_step_;
+  if (opt_.tissue_subsample < 0 || opt_.colour_subsample < 0 || tissue_step_ % colour_step_ != 0)
+    throw std::invalid_argument("tissue_subsample must be a positive multiple of tissue_colour_subsample (>= 1)");
+  if (opt_.texture_size < 16 || opt_.texture_size > 8192)
+    throw std::invalid_argument("parameter ~texture_size must be in [16, 8192] texels");
+  if (!(opt_.texture_extent > 0) || !std::isfinite(opt_.texture_extent))
+    throw std::invalid_argument("parameter ~texture_extent must be > 0 m");
+  if (!(opt_.light_distance > 0) || !std::isfinite(opt_.light_distance))
+    throw std::invalid_argument("parameter ~light_distance must be > 0 m");
+  if (cam_.width() / tissue_step_ < 2 || cam_.height() / tissue_step_ < 2)
+    throw std::invalid_argument("image too small for the tissue grid");
+  cam_.pixelRays(1, rays_x_, rays_y_);
+  cam_.pixelRays(tissue_step_, rays_lo_x_, rays_lo_y_);
+  if (rays_lo_x_.cols % 2 == 0 && rays_lo_x_.rows % 2 == 0 && rays_lo_x_.cols >= 160)
+  {
+    cam_.pixelRays(2 * tissue_step_, rays_c_x_, rays_c_y_);
+    t_c_.create(rays_c_x_.size(), CV_32F);
+  }
+  if (opt_.tissue_iterations < 1 || opt_.refine_iterations < 0)
+    throw std::invalid_argument("tissue iterations must be >= 1 (refine >= 0)");
+  colour_size_ = cv::Size(cam_.width() / colour_step_, cam_.height() / colour_step_);
+  fov_ = cam_.fieldOfViewBounds();
+  const int n = opt_.texture_size;
+  const cv::Mat tex = tissueTexture(n);
+  tex_pad_ = n / 2;
+  cv::copyMakeBorder(tex, tex_padded_, tex_pad_, tex_pad_, tex_pad_, tex_pad_, cv::BORDER_REFLECT);
+  tex_res_ = opt_.texture_extent / n;
+  tex_x0_ = surface_.cx() - opt_.texture_extent / 2.0;
+  tex_y0_ = surface_.cy() - opt_.texture_extent / 2.0;
+  hmap_.create(n, n, CV_32F);
+  nmap_.create(n, n, CV_32FC3);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+    {
+      const double x = tex_x0_ + (i + 0.5) * tex_res_, y = tex_y0_ + (j + 0.5) * tex_res_;
+      hmap_.at<float>(j, i) = static_cast<float>(surface_.height(x, y));
+      const Eigen::Vector3d nn = surface_.normal(x, y);
+      nmap_.at<cv::Vec3f>(j, i) = cv::Vec3f(float(nn.x()), float(nn.y()), float(nn.z()));
+    }
+  bg_.create(cam_.height(), cam_.width(), CV_8UC3);
+  depth_.create(cam_.height(), cam_.width(), CV_32F);
+  t_lo_.create(rays_lo_x_.size(), CV_32F);
+  maps_lo_.create(rays_lo_x_.size(), CV_32FC2);
+  shade_lo_.create(rays_lo_x_.size(), CV_32F);
+}
+
+void SceneRenderer::setBoxes(const std::vector<std::array<Eigen::Vector3d, 8>>& boxes_world)
+{
+  boxes_.clear();
+  for (const auto& v : boxes_world)
+    boxes_.push_back(boxFromVertices(v));
+  cache_valid_ = false;
+}
+
+void SceneRenderer::setTarget(std::shared_ptr<const PlanarTarget> target, const Eigen::Isometry3d& T_world_board)
+{
+  target_ = std::move(target);
+  T_world_board_ = T_world_board;
+  cache_valid_ = false;
+}
+
+void SceneRenderer::clearTarget()
+{
+  target_.reset();
+  cache_valid_ = false;
+}
+
+void SceneRenderer::setUniformTexture(unsigned char grey)
+{
+  tex_padded_.setTo(cv::Scalar::all(grey));
+  cache_valid_ = false;
+}
+
+const cv::Mat& SceneRenderer::background(const Eigen::Isometry3d& T_world_cam)
+{
+  if (!cache_valid_ || (cache_pose_.matrix() - T_world_cam.matrix()).cwiseAbs().maxCoeff() > 1e-7)
+  {
+    renderBackground(T_world_cam);
+    cache_pose_ = T_world_cam;
+    cache_valid_ = true;
+    ++background_renders_;
+  }
+  return bg_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tissue: fixed-point iteration t <- (h(o + t d) - o_z) / d_z along the rays pointing down; t is
+// the optical depth (d = R (x, y, 1)). Texture coordinates (texels) are affine in t.
+void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f& o)
+{
+  const int h = rays_lo_x_.rows, w = rays_lo_x_.cols, n = opt_.texture_size;
+  const float inv_res = static_cast<float>(1.0 / tex_res_);
+  const float ax = static_cast<float>((o.x() - tex_x0_) / tex_res_ - 0.5);
+  const float ay = static_cast<float>((o.y() - tex_y0_) / tex_res_ - 0.5);
+  const float z0 = static_cast<float>(surface_.z0());
+  const float pad = static_cast<float>(tex_pad_);
+  const float L = static_cast<float>(opt_.light_distance);
+  const float* hm = hmap_.ptr<float>();
+  const cv::Vec3f* nm = nmap_.ptr<cv::Vec3f>();
+  row_kz_.resize(w);
+  row_bx_.resize(w);
+  row_by_.resize(w);
+  row_t_.resize(w);
+  float* kzs = row_kz_.data();
+  float* bxs = row_bx_.data();
+  float* bys = row_by_.data();
+  float* ts = row_t_.data();
+  // one row of rays: directions, start depth (tstart: previous solution, or the mean plane),
+  // fixed-point iterations; iteration-major, so that the samples of a row are independent loads
+  // (memory-level parallelism) while the iterations of one ray form a dependent chain
+  auto solveRow = [&](const float* rx, const float* ry, int count, const float* tstart, int iterations) {
+    for (int i = 0; i < count; ++i)
+    {
+      const Eigen::Vector3f d = R * Eigen::Vector3f(rx[i], ry[i], 1.f);
+      kzs[i] = d.z() < -1e-6f ? 1.f / d.z() : 0.f;  // 0: ray not pointing down (miss)
+      bxs[i] = d.x() * inv_res;
+      bys[i] = d.y() * inv_res;
+      ts[i] = tstart ? tstart[i] : (z0 - o.z()) * (kzs[i] != 0.f ? kzs[i] : -1.f);
+    }
+    for (int it = 0; it < iterations; ++it)
+      for (int i = 0; i < count; ++i)
+        ts[i] = (sampleClamp(hm, n, ax + ts[i] * bxs[i], ay + ts[i] * bys[i]) - o.z()) * (kzs[i] != 0.f ? kzs[i] : -1.f);
+  };
+  const bool coarse = !rays_c_x_.empty();
+  if (coarse)
+  {
+    // all iterations on a grid twice coarser, upsampled to the tissue grid as the start
+    for (int j = 0; j < rays_c_x_.rows; ++j)
+    {
+      solveRow(rays_c_x_.ptr<float>(j), rays_c_y_.ptr<float>(j), rays_c_x_.cols, nullptr, opt_.tissue_iterations);
+      std::copy(ts, ts + rays_c_x_.cols, t_c_.ptr<float>(j));
+    }
+    cv::resize(t_c_, t_init_, t_lo_.size(), 0, 0, cv::INTER_LINEAR);
+  }
+  for (int j = 0; j < h; ++j)
+  {
+    const float* rx = rays_lo_x_.ptr<float>(j);
+    const float* ry = rays_lo_y_.ptr<float>(j);
+    float* tt = t_lo_.ptr<float>(j);
+    cv::Vec2f* mp = maps_lo_.ptr<cv::Vec2f>(j);
+    float* sh = shade_lo_.ptr<float>(j);
+    solveRow(rx, ry, w, coarse ? t_init_.ptr<float>(j) : nullptr, coarse ? opt_.refine_iterations : opt_.tissue_iterations);
+    for (int i = 0; i < w; ++i)
+    {
+      const float t = ts[i];
+      const float mx = ax + t * bxs[i], my = ay + t * bys[i];
+      mp[i] = cv::Vec2f(mx + pad, my + pad);
+      if (kzs[i] == 0.f || !(t > 0.f))
+      {
+        tt[i] = kInf;
+        sh[i] = 0.f;
+        continue;
+      }
+      tt[i] = t;
+      const Eigen::Vector3f d = R * Eigen::Vector3f(rx[i], ry[i], 1.f);
+      const Eigen::Vector3f nrm = sampleClamp3(nm, n, mx, my);
+      const float dn = d.norm();
+      const float lam = std::min(std::max(-nrm.dot(d) / dn, 0.f), 1.f);
+      const float x = L / std::max(t * dn, 1e-3f);
+      const float fall = std::min(std::max(x * std::sqrt(x), 0.3f), 1.3f);  // (L / distance)^1.5
+      sh[i] = (0.15f + 0.85f * lam) * fall * 128.f;
+    }
+  }
+}
+
+inline float SceneRenderer::tissueDepthAt(int u, int v) const
+{
+  // the full-resolution tissue depth of cv::resize(INTER_LINEAR) of the tissue grid at pixel
+  // (u, v), inf where an interpolation tap misses the tissue
+  const int h = t_lo_.rows, w = t_lo_.cols;
+  const float inv = 1.f / tissue_step_;
+  const float fy = std::min(std::max((v + 0.5f) * inv - 0.5f, 0.f), float(h - 1));
+  const float fx = std::min(std::max((u + 0.5f) * inv - 0.5f, 0.f), float(w - 1));
+  const int j0 = std::min(int(fy), h - 2), i0 = std::min(int(fx), w - 2);
+  const float a = fx - i0, b = fy - j0;
+  const float* r0 = t_lo_.ptr<float>(j0) + i0;
+  const float* r1 = t_lo_.ptr<float>(j0 + 1) + i0;
+  const float d = (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
+  return d < kInf ? d : kInf;  // NaN (inf - inf) -> inf
+}
+
+bool SceneRenderer::roi(const Eigen::Isometry3d& T_cam_world, const std::vector<Eigen::Vector3d>& pts_world,
+                        cv::Rect& out) const
+{
+  const double near = 1e-4;
+  bool all_behind = true, any_behind = false;
+  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+  for (const auto& p : pts_world)
+  {
+    const Eigen::Vector3d pc = T_cam_world * p;
+    all_behind = all_behind && pc.z() <= near;
+    any_behind = any_behind || pc.z() <= near;
+    if (pc.z() > near)
+    {
+      const Eigen::Vector2d xy = pc.head<2>() / pc.z();
+      lo = lo.cwiseMin(xy);
+      hi = hi.cwiseMax(xy);
+    }
+  }
+  if (all_behind)
+    return false;
+  if (any_behind)
+  {
+    out = cv::Rect(0, 0, cam_.width(), cam_.height());
+    return true;
+  }
+  lo = lo.cwiseMax(-1.02 * fov_);
+  hi = hi.cwiseMin(1.02 * fov_);
+  if (lo.x() > hi.x() || lo.y() > hi.y())
+    return false;
+  double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
+  for (int k = 0; k <= 16; ++k)
+  {
+    const double s = k / 16.0;
+    const Eigen::Vector2d e[4] = { { lo.x() + s * (hi.x() - lo.x()), lo.y() },
+                                   { lo.x() + s * (hi.x() - lo.x()), hi.y() },
+                                   { lo.x(), lo.y() + s * (hi.y() - lo.y()) },
+                                   { hi.x(), lo.y() + s * (hi.y() - lo.y()) } };
+    for (const auto& xy : e)
+    {
+      const Eigen::Vector2d uv = cam_.distort(xy);
+      u0 = std::min(u0, uv.x());
+      v0 = std::min(v0, uv.y());
+      u1 = std::max(u1, uv.x());
+      v1 = std::max(v1, uv.y());
+    }
+  }
+  const int x0 = std::max(int(std::floor(u0)) - 3, 0), y0 = std::max(int(std::floor(v0)) - 3, 0);
+  const int x1 = std::min(int(std::ceil(u1)) + 4, cam_.width()), y1 = std::min(int(std::ceil(v1)) + 4, cam_.height());
+  if (x0 >= x1 || y0 >= y1)
+    return false;
+  out = cv::Rect(x0, y0, x1 - x0, y1 - y0);
+  return true;
+}
+
+void SceneRenderer::renderBackground(const Eigen::Isometry3d& T_world_cam)
+{
+  const Eigen::Matrix3f R = T_world_cam.linear().cast<float>();
+  const Eigen::Vector3f o = T_world_cam.translation().cast<float>();
+  solveTissue(R, o);
+  // colour layer: texture coordinates + shade upsampled to the colour grid, texture sampled
+  // there, shaded (shade rounded to uint8 x 1/128, as the Python reference), upsampled to the image
+  cv::resize(maps_lo_, maps_c_, colour_size_, 0, 0, cv::INTER_LINEAR);
+  cv::resize(shade_lo_, shade_c_, colour_size_, 0, 0, cv::INTER_LINEAR);
+  cv::remap(tex_padded_, col_c_, maps_c_, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  for (int j = 0; j < col_c_.rows; ++j)
+  {
+    cv::Vec3b* c = col_c_.ptr<cv::Vec3b>(j);
+    const float* s = shade_c_.ptr<float>(j);
+    for (int i = 0; i < col_c_.cols; ++i)
+    {
+      const float k = static_cast<float>(cv::saturate_cast<uchar>(s[i])) * (1.f / 128.f);
+      for (int ch = 0; ch < 3; ++ch)
+        c[i][ch] = cv::saturate_cast<uchar>(c[i][ch] * k);
+    }
+  }
+  if (col_c_.size() == bg_.size())
+    col_c_.copyTo(bg_);
+  else
+    cv::resize(col_c_, bg_, bg_.size(), 0, 0, cv::INTER_LINEAR);
+  if (boxes_.empty() && !target_)
+    return;
+  // rectangles that need a full-resolution depth: the bones' and the target's
+  const Eigen::Isometry3d Tcw = T_world_cam.inverse();
+  cv::Rect all;
+  std::vector<Eigen::Vector3d> pts;
+  for (const Box& b : boxes_)
+  {
+    const auto c = b.corners();
+    pts.assign(c.begin(), c.end());
+    cv::Rect r;
+    if (roi(Tcw, pts, r))
+      all = all.area() ? (all | r) : r;
+  }
+  cv::Rect target_rect;
+  if (target_)
+  {
+    pts.clear();
+    for (double x : { target_->x_min, target_->xMax() })
+      for (double y : { target_->y_min, target_->yMax() })
+        pts.push_back(T_world_board_ * Eigen::Vector3d(x, y, 0.0));
+    if (roi(Tcw, pts, target_rect))
+      all = all.area() ? (all | target_rect) : target_rect;
+  }
+  if (all.area() == 0)
+    return;
+  // depth_ holds the optical depth of the bones/target drawn so far (inf = none); the tissue
+  // depth is interpolated only at the pixels they hit
+  depth_(all).setTo(kInf);
+  if (!boxes_.empty())
+    renderBoxes(T_world_cam, all);
+  if (target_rect.area() > 0)
+    renderTarget(T_world_cam, target_rect);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bones: exact ray/oriented-box intersection (slabs) at every pixel centre of the box's image
+// rectangle, z-tested against the depth; flat shading per face (Lambert at the face centre x
+// head-light fall-off), as the Python reference.
+struct SceneRenderer::BoxCam
+{
+  Eigen::Matrix3f A;    ///< rows: box axes in the camera frame
+  Eigen::Vector3f s;    ///< axis . centre (camera frame)
+  Eigen::Vector3f h;    ///< half extents
+  cv::Vec3b colour[6];  ///< face (axis i, sign) -> colour index 2 i + (sign > 0)
+  cv::Rect rect;
+};
+
+void SceneRenderer::renderBoxes(const Eigen::Isometry3d& T_world_cam, const cv::Rect& depth_rect)
+{
+  const Eigen::Isometry3d Tcw = T_world_cam.inverse();
+  const Eigen::Vector3d o = T_world_cam.translation();
+  const double L = opt_.light_distance;
+  box_tn_.resize(cam_.width());
+  box_face_.resize(cam_.width());
+  std::vector<Eigen::Vector3d> pts;
+  for (const Box& b : boxes_)
+  {
+    // camera inside the box: no face is visible from outside (as the reference)
+    const Eigen::Vector3d ob = b.axes * (o - b.centre);
+    if ((ob.cwiseAbs() - b.half).maxCoeff() <= 0.0)
+      continue;
+    BoxCam bc;
+    const auto c = b.corners();
+    pts.assign(c.begin(), c.end());
+    if (!roi(Tcw, pts, bc.rect))
+      continue;
+    bc.rect &= depth_rect;
+    const Eigen::Vector3d cc = Tcw * b.centre;
+    for (int i = 0; i < 3; ++i)
+    {
+      const Eigen::Vector3d a = Tcw.linear() * b.axes.row(i).transpose();
+      bc.A.row(i) = a.cast<float>().transpose();
+      bc.s[i] = static_cast<float>(a.dot(cc));
+      bc.h[i] = static_cast<float>(b.half[i]);
+      for (int sg = 0; sg < 2; ++sg)
+      {
+        const Eigen::Vector3d nrm = (sg ? 1.0 : -1.0) * a;
+        const Eigen::Vector3d fc = cc + nrm * b.half[i];
+        const double dist = std::max(fc.norm(), 1e-3);
+        const double fall = std::min(std::max(std::pow(L / dist, 1.5), 0.3), 1.3);
+        const double lam = std::max(-nrm.dot(fc) / dist, 0.0);
+        const double shade = std::min((0.25 + 0.75 * lam) * fall, 1.3);
+        for (int ch = 0; ch < 3; ++ch)
+          bc.colour[2 * i + sg][ch] =
+              cv::saturate_cast<uchar>(std::min(std::max(shade * bone_bgr_[ch], 1.0), 255.0));
+      }
+    }
+    const float near = 1e-3f;
+    // per-row pixel spans of the box's silhouette: convex hull of its edges projected through the
+    // distortion model (9 samples per edge), 2 px margin; the bounding rectangle if the box is not
+    // entirely in front of the camera and inside 1.5 x the field of view
+    bool hull_ok = true;
+    hull_pts_.clear();
+    static const int edges[12][2] = { { 0, 1 }, { 2, 3 }, { 4, 5 }, { 6, 7 }, { 0, 2 }, { 1, 3 },
+                                      { 4, 6 }, { 5, 7 }, { 0, 4 }, { 1, 5 }, { 2, 6 }, { 3, 7 } };
+    for (const auto& e : edges)
+    {
+      const Eigen::Vector3d a = Tcw * c[e[0]], b2 = Tcw * c[e[1]];
+      for (int k = 0; k < 9 && hull_ok; ++k)
+      {
+        const Eigen::Vector3d p = a + (k / 8.0) * (b2 - a);
+        if (p.z() < 1e-3 || std::abs(p.x() / p.z()) > 1.5 * fov_.x() || std::abs(p.y() / p.z()) > 1.5 * fov_.y())
+        {
+          hull_ok = false;
+          break;
+        }
+        const Eigen::Vector2d uv = cam_.project(p);
+        hull_pts_.emplace_back(float(uv.x()), float(uv.y()));
+      }
+    }
+    if (hull_ok)
+      cv::convexHull(hull_pts_, hull_);
+    for (int v = bc.rect.y; v < bc.rect.y + bc.rect.height; ++v)
+    {
+      int u0 = bc.rect.x, u1 = bc.rect.x + bc.rect.width;
+      if (hull_ok)
+      {
+        float lo = 1e30f, hi = -1e30f;
+        const size_t nh = hull_.size();
+        for (size_t k = 0; k < nh; ++k)
+        {
+          const cv::Point2f& p = hull_[k];
+          const cv::Point2f& q = hull_[(k + 1) % nh];
+          // the row band [v - 2, v + 2] against edge p-q: x range of the edge within the band
+          const float ya = std::max(std::min(p.y, q.y), v - 2.f), yb = std::min(std::max(p.y, q.y), v + 2.f);
+          if (ya > yb)
+            continue;
+          if (std::abs(q.y - p.y) < 1e-6f)
+          {
+            lo = std::min(lo, std::min(p.x, q.x));
+            hi = std::max(hi, std::max(p.x, q.x));
+            continue;
+          }
+          const float xa = p.x + (ya - p.y) * (q.x - p.x) / (q.y - p.y);
+          const float xb = p.x + (yb - p.y) * (q.x - p.x) / (q.y - p.y);
+          lo = std::min(lo, std::min(xa, xb));
+          hi = std::max(hi, std::max(xa, xb));
+        }
+        if (lo > hi)
+          continue;
+        u0 = std::max(u0, int(std::floor(lo)) - 2);
+        u1 = std::min(u1, int(std::ceil(hi)) + 3);
+      }
+      const float* rx = rays_x_.ptr<float>(v);
+      const float* ry = rays_y_.ptr<float>(v);
+      float* dp = depth_.ptr<float>(v);
+      cv::Vec3b* img = bg_.ptr<cv::Vec3b>(v);
+      // pass 1 (branch-free, vectorisable): entry depth (inf = miss) and entry face per pixel
+      float* tn_row = box_tn_.data();
+      int* face_row = box_face_.data();
+      const float a00 = bc.A(0, 0), a01 = bc.A(0, 1), a02 = bc.A(0, 2), a10 = bc.A(1, 0), a11 = bc.A(1, 1),
+                  a12 = bc.A(1, 2), a20 = bc.A(2, 0), a21 = bc.A(2, 1), a22 = bc.A(2, 2);
+      const float lo0 = bc.s[0] - bc.h[0], hi0 = bc.s[0] + bc.h[0], lo1 = bc.s[1] - bc.h[1], hi1 = bc.s[1] + bc.h[1],
+                  lo2 = bc.s[2] - bc.h[2], hi2 = bc.s[2] + bc.h[2];
+      for (int u = u0; u < u1; ++u)
+      {
+        const float x = rx[u], y = ry[u];
+        // ray . axis; an exactly parallel ray gives +-inf / NaN slab bounds: treated as a miss
+        const float i0 = 1.f / (a00 * x + a01 * y + a02), i1 = 1.f / (a10 * x + a11 * y + a12),
+                    i2 = 1.f / (a20 * x + a21 * y + a22);
+        const float p0 = lo0 * i0, q0 = hi0 * i0, p1 = lo1 * i1, q1 = hi1 * i1, p2 = lo2 * i2, q2 = hi2 * i2;
+        const float n0 = std::min(p0, q0), f0 = std::max(p0, q0), n1 = std::min(p1, q1), f1 = std::max(p1, q1),
+                    n2 = std::min(p2, q2), f2 = std::max(p2, q2);
+        const float tn = std::max(n0, std::max(n1, n2)), tf = std::min(f0, std::min(f1, f2));
+        // entering face: axis of the largest near bound, side opposing the ray (1: + side)
+        const int ax = n0 >= n1 ? (n0 >= n2 ? 0 : 2) : (n1 >= n2 ? 1 : 2);
+        const float iv = ax == 0 ? i0 : (ax == 1 ? i1 : i2);
+        face_row[u - u0] = 2 * ax + (iv > 0.f ? 0 : 1);
+        tn_row[u - u0] = (tn <= tf && tn >= near) ? tn : kInf;
+      }
+      // pass 2: z-test against what is drawn and the tissue
+      for (int u = u0; u < u1; ++u)
+      {
+        const float tn = tn_row[u - u0];
+        if (!(tn < dp[u]) || !(tn < tissueDepthAt(u, v)))
+          continue;
+        dp[u] = tn;
+        img[u] = bc.colour[face_row[u - u0]];
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Target: ray/board-plane intersection per pixel, bilinear texture, matte paper (0.85 v + 20).
+void SceneRenderer::renderTarget(const Eigen::Isometry3d& T_world_cam, const cv::Rect& r)
+{
+  const PlanarTarget& tg = *target_;
+  const Eigen::Isometry3d T_board_cam = T_world_board_.inverse() * T_world_cam;
+  const Eigen::Matrix3d Rbc = T_board_cam.linear();
+  const Eigen::Vector3d ob = T_board_cam.translation();
+  const double xmin = tg.x_min, ymin = tg.y_min, xmax = tg.xMax(), ymax = tg.yMax(), inv_res = 1.0 / tg.res;
+  const int tw = tg.texture.cols, th = tg.texture.rows;
+  for (int v = r.y; v < r.y + r.height; ++v)
+  {
+    const float* rx = rays_x_.ptr<float>(v);
+    const float* ry = rays_y_.ptr<float>(v);
+    float* dp = depth_.ptr<float>(v);
+    cv::Vec3b* img = bg_.ptr<cv::Vec3b>(v);
+    for (int u = r.x; u < r.x + r.width; ++u)
+    {
+      const Eigen::Vector3d db = Rbc * Eigen::Vector3d(rx[u], ry[u], 1.0);
+      const double t = -ob.z() / db.z();
+      if (!(t > 0) || !std::isfinite(t) || !(t < dp[u]))
+        continue;
+      const double x = ob.x() + t * db.x(), y = ob.y() + t * db.y();
+      if (x < xmin || x >= xmax || y < ymin || y >= ymax || !(t < tissueDepthAt(u, v)))
+        continue;
+      double mx = (x - xmin) * inv_res - 0.5, my = (y - ymin) * inv_res - 0.5;
+      mx = std::min(std::max(mx, 0.0), double(tw - 1));
+      my = std::min(std::max(my, 0.0), double(th - 1));
+      const int i0 = std::min(int(mx), tw - 2), j0 = std::min(int(my), th - 2);
+      const double a = mx - i0, b = my - j0;
+      const uchar* t0 = tg.texture.ptr<uchar>(j0) + i0;
+      const uchar* t1 = tg.texture.ptr<uchar>(j0 + 1) + i0;
+      const double val = std::nearbyint((1 - b) * ((1 - a) * t0[0] + a * t0[1]) + b * ((1 - a) * t1[0] + a * t1[1]));
+      const uchar g = static_cast<uchar>(val * 0.85 + 20.0);  // matte paper
+      img[u] = cv::Vec3b(g, g, g);
+      dp[u] = static_cast<float>(t);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+void SceneRenderer::render(const Eigen::Isometry3d& T_world_cam, const std::vector<Shaft>& shafts, cv::Mat& out)
+{
+  const cv::Mat& bg = background(T_world_cam);
+  bg.copyTo(out);
+  if (shafts.empty())
+    return;
+  const Eigen::Isometry3d Tcw = T_world_cam.inverse();
+  struct Item
+  {
+    double zmin;
+    std::vector<Eigen::Vector3d> pc;
+    std::vector<bool> above;
+    double radius;
+  };
+  std::vector<Item> items;
+  items.reserve(shafts.size());
+  for (const Shaft& s : shafts)
+  {
+    if (!s.tip.allFinite() || !s.rcm.allFinite() || !std::isfinite(s.radius))
+      continue;
+    Item it;
+    it.radius = s.radius;
+    it.zmin = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 17; ++k)
+    {
+      const Eigen::Vector3d pw = k < 16 ? Eigen::Vector3d(s.tip + (k / 15.0) * (s.rcm - s.tip))
+                                        : Eigen::Vector3d(s.rcm + 0.25 * (s.rcm - s.tip));
+      it.above.push_back(pw.z() >= surface_.height(pw.x(), pw.y()) - 1e-4);
+      it.pc.push_back(Tcw * pw);
+      it.zmin = std::min(it.zmin, it.pc.back().z());
+    }
+    items.push_back(std::move(it));
+  }
+  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.zmin > b.zmin; });
+  for (const Item& it : items)
+    drawShaft(out, it.pc, it.above, it.radius);
+}
+
+void SceneRenderer::drawShaft(cv::Mat& img, const std::vector<Eigen::Vector3d>& pc, const std::vector<bool>& above,
+                              double radius) const
+{
+  const size_t n = pc.size();
+  std::vector<bool> ok(n);
+  for (size_t k = 0; k < n; ++k)
+  {
+    const Eigen::Vector3d& p = pc[k];
+    ok[k] = above[k] && p.z() > 0.003 && std::abs(p.x() / p.z()) < 2.0 * fov_.x() &&
+            std::abs(p.y() / p.z()) < 2.0 * fov_.y();
+  }
+  // longest run of consecutive visible samples starting at the first visible one (nearest the tip)
+  size_t first = 0;
+  while (first < n && !ok[first])
+    ++first;
+  size_t last = first;
+  while (last + 1 < n && ok[last + 1])
+    ++last;
+  if (first >= n || last - first + 1 < 2)
+    return;
+  const size_t m = last - first + 1;
+  std::vector<Eigen::Vector2d> uv(m), nrm(m);
+  std::vector<double> half(m);
+  const double f = cam_.K()(0, 0);
+  for (size_t k = 0; k < m; ++k)
+  {
+    uv[k] = cam_.project(pc[first + k]);
+    half[k] = f * radius / pc[first + k].z();
+  }
+  for (size_t k = 0; k < m; ++k)
+  {
+    Eigen::Vector2d tang = k == 0 ? Eigen::Vector2d(uv[1] - uv[0]) :
+                                    k == m - 1 ? Eigen::Vector2d(uv[m - 1] - uv[m - 2]) :
+                                                 Eigen::Vector2d((uv[k + 1] - uv[k - 1]) / 2.0);
+    Eigen::Vector2d nn(-tang.y(), tang.x());
+    nrm[k] = nn / std::max(nn.norm(), 1e-9);
+  }
+  std::vector<cv::Point> poly(2 * m), hl(m);
+  for (size_t k = 0; k < m; ++k)
+  {
+    const Eigen::Vector2d l = uv[k] + nrm[k] * half[k], r = uv[k] - nrm[k] * half[k];
+    if (!l.allFinite() || !r.allFinite() || l.cwiseAbs().maxCoeff() > 1e5 || r.cwiseAbs().maxCoeff() > 1e5)
+      return;
+    poly[k] = cv::Point(int(std::nearbyint(l.x() * 16)), int(std::nearbyint(l.y() * 16)));
+    poly[2 * m - 1 - k] = cv::Point(int(std::nearbyint(r.x() * 16)), int(std::nearbyint(r.y() * 16)));
+    const Eigen::Vector2d h = uv[k] + nrm[k] * (0.35 * half[k]);
+    hl[k] = cv::Point(int(std::nearbyint(h.x() * 16)), int(std::nearbyint(h.y() * 16)));
+  }
+  const cv::Point* pp = poly.data();
+  const int np = static_cast<int>(poly.size());
+  cv::fillPoly(img, &pp, &np, 1, cv::Scalar(105, 108, 112), cv::LINE_AA, 4);
+  cv::circle(img, cv::Point(int(std::nearbyint(uv[0].x() * 16)), int(std::nearbyint(uv[0].y() * 16))),
+             int(std::nearbyint(half[0] * 16)), cv::Scalar(60, 60, 62), -1, cv::LINE_AA, 4);
+  std::vector<double> hs(half);
+  std::sort(hs.begin(), hs.end());
+  const double med = m % 2 ? hs[m / 2] : 0.5 * (hs[m / 2 - 1] + hs[m / 2]);
+  const int w = std::max(1, int(std::nearbyint(0.3 * med)));
+  const cv::Point* ph = hl.data();
+  const int nh = static_cast<int>(hl.size());
+  cv::polylines(img, &ph, &nh, 1, false, cv::Scalar(190, 192, 195), w, cv::LINE_AA, 4);
+}
+
+}  // namespace endoscope
+}  // namespace saras_drivers
