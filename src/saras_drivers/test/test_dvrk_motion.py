@@ -187,3 +187,29 @@ def test_stand_in_matches_saras_description_conventions():
     Tl, Tr = kin.camera_in_tip('left'), kin.camera_in_tip('right')
     b = (rigid.invert(Tl) @ Tr)[:3, 3]
     assert 0.001 <= b[0] <= 0.02 and abs(b[1]) < 1e-6 and abs(b[2]) < 1e-6
+
+
+def test_sample_grid_catches_up_with_grid_times():
+    """SampleGrid: every grid time once, at the grid time, however the wake-ups jitter; a late
+    wake-up returns the missed samples at once (<= max_catch_up); beyond that the grid restarts
+    and counts what it skipped; a clock jump back restarts it."""
+    from saras_drivers.dvrk_motion import SampleGrid
+    g = SampleGrid(0.01, max_catch_up=5)
+    out = []
+    for now in (0.0, 0.0101, 0.0199, 0.0305, 0.07):      # 0.07: 4 samples late
+        out += g.due(now)
+    assert np.allclose(out, [0.0, 0.01, 0.02, 0.03, 0.04, 0.05, 0.06, 0.07])
+    assert g.missed == 0
+    assert g.due(0.0705) == []
+    late = g.due(0.2)                                    # 13 samples due: 5 now, 8 skipped
+    assert np.allclose(late, [0.08, 0.09, 0.10, 0.11, 0.12]) and g.missed == 8
+    assert np.allclose(g.due(0.215), [0.21])             # grid restarted after now
+    assert np.allclose(g.due(0.1), [0.1])                # clock jumped back: restart there
+    ts = []
+    g = SampleGrid(0.01, 10)
+    for now in np.arange(0.0, 5.0, 0.0137):              # wake-ups off the grid
+        ts += g.due(float(now))
+    assert np.allclose(np.diff(ts), 0.01) and len(ts) == int(round(ts[-1] / 0.01)) + 1
+    for bad in ((0.0, 5), (float('nan'), 5), (0.01, 0), (0.01, True), (0.01, 2.5)):
+        with pytest.raises(ValueError):
+            SampleGrid(*bad)

@@ -61,6 +61,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include "saras_drivers/endoscope_renderer.h"
+#include "saras_drivers/nodelet_namespace.h"
 
 namespace saras_drivers
 {
@@ -792,13 +793,8 @@ private:
   {
     try
     {
-      // Topic names are made absolute from the nodelet's own namespace (e.g. /endoscope/left/...):
-      // the nodelet NodeHandle of a nodelet at the root resolves relative names in the manager's
-      // namespace. Remappings still apply (they act on resolved names).
-      std::string ns = ros::names::parentNamespace(getName());
-      if (ns.empty() || ns.back() != '/')
-        ns += '/';
-      sim_.reset(new EndoscopeSim(getNodeHandle(), getPrivateNodeHandle(), getName(), ns));
+      // topics in the nodelet's own namespace (e.g. /endoscope/left/...), not the manager's
+      sim_.reset(new EndoscopeSim(getNodeHandle(), getPrivateNodeHandle(), getName(), nodeletNamespace(getName())));
     }
     catch (const std::exception& e)
     {

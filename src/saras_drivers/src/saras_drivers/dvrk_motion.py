@@ -353,3 +353,39 @@ class ReplaySchedule(object):
                 self._next = 0
                 continue
             return out
+
+
+class SampleGrid(object):
+    """Sample instants on a fixed grid of ``period`` [s], as a real-time publisher thread keeps
+    them: :meth:`due` returns the grid times up to ``now`` not yet returned, at most
+    ``max_catch_up`` (a late wake-up is made good at once, with the samples' own times); when
+    further behind, or when the clock jumped back, the grid restarts at ``now`` and the skipped
+    samples are counted in ``missed``."""
+
+    def __init__(self, period, max_catch_up=10):
+        if not (period > 0 and math.isfinite(period)):
+            raise ValueError('sample period must be > 0 s, got %r' % (period,))
+        if isinstance(max_catch_up, bool) or not isinstance(max_catch_up, int) or max_catch_up < 1:
+            raise ValueError('max_catch_up must be an integer >= 1, got %r' % (max_catch_up,))
+        self.period = float(period)
+        self.max_catch_up = max_catch_up
+        self.k0 = None       # grid origin [s]
+        self.k = 0           # index of the next sample
+        self.missed = 0
+
+    def due(self, now):
+        """Grid times [s] <= ``now`` [s] not returned before (list, oldest first)."""
+        if self.k0 is None or now < self.k0 + (self.k - 1) * self.period:
+            self.k0, self.k = now, 0            # start, or the clock jumped back
+        out = []
+        while len(out) < self.max_catch_up:
+            t = self.k0 + self.k * self.period
+            if t > now + 1e-9:
+                return out
+            out.append(t)
+            self.k += 1
+        behind = int(math.floor((now - (self.k0 + self.k * self.period)) / self.period + 1e-9)) + 1
+        if behind > 0:                          # still behind: skip to now
+            self.missed += behind
+            self.k0, self.k = now + self.period, 0
+        return out

@@ -60,6 +60,7 @@
 
 #include "saras_drivers/touchball_kinematics.h"
 #include "saras_drivers/touchball_link.h"
+#include "saras_drivers/nodelet_namespace.h"
 
 namespace saras_drivers
 {
@@ -689,14 +690,8 @@ private:
   {
     try
     {
-      // Topic names are made absolute from the nodelet's own namespace: the nodelet's NodeHandle of
-      // a nodelet at the root ("/touchball_receiver") resolves relative names in the MANAGER's
-      // namespace (e.g. /teleop), which would move the topics when loaded into /teleop/teleop_manager.
-      // Remappings still apply (they act on resolved names).
-      std::string ns = ros::names::parentNamespace(getName());
-      if (ns.empty() || ns.back() != '/')
-        ns += '/';
-      receiver_.reset(new TouchballReceiver(getNodeHandle(), getPrivateNodeHandle(), ns));
+      // topics in the nodelet's own namespace (/touchball/...), not /teleop/ of the manager
+      receiver_.reset(new TouchballReceiver(getNodeHandle(), getPrivateNodeHandle(), nodeletNamespace(getName())));
     }
     catch (const std::exception& e)
     {

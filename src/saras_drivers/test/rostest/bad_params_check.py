@@ -15,6 +15,8 @@ CASES = [
     ('dvrk_sim', ['_publish_link_tf:=true', '_robot_description_param:=/nowhere/{arm}/urdf'],
      '/nowhere/PSM1/urdf'),
     ('dvrk_sim', ['_publish_link_tf:=2'], '~publish_link_tf must be a boolean'),
+    ('dvrk_sim', ['_max_catch_up:=0'], '~max_catch_up must be an integer in [1, 1000]'),
+    ('dvrk_sim', ['_link_tf_rate:=-5.0'], '~link_tf_rate'),
     ('endoscope_sim', ['_fps:=0'], '~fps'),
     ('endoscope_sim', ['_camera_info_dir:=/nonexistent'], 'camera_info'),
     ('contact_sim', ['_rate:=0'], '~rate'),
