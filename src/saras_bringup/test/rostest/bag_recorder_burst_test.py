@@ -43,6 +43,11 @@ class BagRecorderBurst(unittest.TestCase):
 
     def record_burst(self, name, extra):
         out = os.path.join(self.tmp, name + '.bag')
+        # the previous recorder's connection must be gone, or the wait below would see it
+        deadline = time.monotonic() + 20.0
+        while self.pub.get_num_connections() > 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        self.assertEqual(self.pub.get_num_connections(), 0, 'a previous subscriber is still connected')
         proc = subprocess.Popen(['rosrun', 'saras_bringup', 'bag_recorder', '-O', out, '--tcpnodelay']
                                 + extra + [TOPIC, LATCHED, '__name:=rec_' + name])
         try:
