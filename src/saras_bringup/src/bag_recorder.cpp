@@ -20,7 +20,6 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -128,7 +127,7 @@ bool parseOptions(int argc, char** argv, Options& o)
 /// One received message on its way to the bag.
 struct Outgoing
 {
-  std::string topic;
+  const std::string* topic = nullptr;  ///< one of Options::topics (stable for the recorder's life)
   topic_tools::ShapeShifter::ConstPtr msg;
   boost::shared_ptr<ros::M_string> header;
   ros::Time time;
@@ -137,7 +136,10 @@ struct Outgoing
 class BagRecorder
 {
 public:
-  explicit BagRecorder(const Options& o) : options_(o), queue_(o.buffer_mb * 1024 * 1024) {}
+  explicit BagRecorder(const Options& o)
+    : options_(o), queue_(o.buffer_mb * 1024 * 1024), counts_(o.topics.size(), 0)
+  {
+  }
 
   /// Opens the bag and subscribes; throws rosbag::BagException when the bag cannot be opened.
   void start()
@@ -149,8 +151,9 @@ public:
     ros::TransportHints hints;
     if (options_.tcp_nodelay)
       hints = hints.tcpNoDelay();
-    for (const std::string& topic : options_.topics)
+    for (std::size_t i = 0; i < options_.topics.size(); ++i)
     {
+      const std::string& topic = options_.topics[i];
       ros::SubscribeOptions ops;
       ops.topic = topic;
       ops.queue_size = options_.queue;
@@ -158,11 +161,10 @@ public:
       ops.datatype = ros::message_traits::datatype<topic_tools::ShapeShifter>();
       ops.helper = boost::make_shared<
           ros::SubscriptionCallbackHelperT<const ros::MessageEvent<topic_tools::ShapeShifter const>&>>(
-          [this, topic](const ros::MessageEvent<topic_tools::ShapeShifter const>& e) { onMessage(topic, e); });
+          [this, i](const ros::MessageEvent<topic_tools::ShapeShifter const>& e) { onMessage(i, e); });
       ops.transport_hints = hints;
       ops.callback_queue = &callbacks_;
       subscribers_.push_back(nh.subscribe(ops));
-      counts_[topic] = 0;
     }
     writer_ = std::thread([this] { writeLoop(); });
     spinner_.reset(new ros::AsyncSpinner(1, &callbacks_));
@@ -194,8 +196,8 @@ public:
       return false;
     }
     std::uint64_t total = 0;
-    for (const auto& c : counts_)
-      total += c.second;
+    for (const std::uint64_t c : counts_)
+      total += c;
     std::printf("bag_recorder: %s closed: %llu messages, %llu dropped by the %zu MB buffer, peak %.1f MB queued, "
                 "%llu write errors\n",
                 options_.output.c_str(), static_cast<unsigned long long>(total),
@@ -206,11 +208,12 @@ public:
   }
 
 private:
-  void onMessage(const std::string& topic, const ros::MessageEvent<topic_tools::ShapeShifter const>& e)
+  /// Per message: no allocation besides the queue node (topic by pointer, counter by index).
+  void onMessage(std::size_t index, const ros::MessageEvent<topic_tools::ShapeShifter const>& e)
   {
-    Outgoing out{ topic, e.getConstMessage(), e.getConnectionHeaderPtr(), ros::Time::now() };
+    Outgoing out{ &options_.topics[index], e.getConstMessage(), e.getConnectionHeaderPtr(), ros::Time::now() };
     const std::size_t bytes = out.msg->size();
-    ++counts_[topic];  // only the single spinner thread touches counts_ while recording
+    ++counts_[index];  // only the single spinner thread touches counts_ while recording
     if (queue_.push(std::move(out), bytes) > 0)
       ROS_WARN_THROTTLE(5.0, "bag_recorder: buffer of %zu MB full, oldest messages dropped (%llu so far)",
                         options_.buffer_mb, static_cast<unsigned long long>(queue_.dropped()));
@@ -229,7 +232,7 @@ private:
       }
       try
       {
-        bag_.write(out.topic, out.time, *out.msg, out.header);
+        bag_.write(*out.topic, out.time, *out.msg, out.header);
       }
       catch (const rosbag::BagException& e)
       {
@@ -246,7 +249,7 @@ private:
   ros::CallbackQueue callbacks_;
   std::unique_ptr<ros::AsyncSpinner> spinner_;
   std::vector<ros::Subscriber> subscribers_;
-  std::map<std::string, std::uint64_t> counts_;
+  std::vector<std::uint64_t> counts_;  ///< messages received per topic (index of Options::topics)
   std::thread writer_;
   std::atomic<bool> stopping_{ false };
   std::atomic<std::uint64_t> write_errors_{ 0 };
