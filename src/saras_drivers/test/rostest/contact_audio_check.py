@@ -9,7 +9,7 @@ import numpy as np
 import rospy
 import rostest
 import tf2_ros
-from geometry_msgs.msg import PoseStamped, TransformStamped
+from geometry_msgs.msg import PointStamped, PoseStamped, TransformStamped
 
 from saras_drivers.tissue_surface import TissueSurface
 from saras_msgs.msg import AudioChunk, ComponentStatus, Contact
@@ -77,6 +77,34 @@ class ContactAudioTest(unittest.TestCase):
         mine = [s for s in st if s.component.endswith('contact_sim')]
         self.assertTrue(mine and mine[-1].level == ComponentStatus.WARN and 'mesa_right' in mine[-1].message)
         self.assertGreater(mine[-1].rejected, 0)
+
+    def test_wrong_pose_type(self):
+        """A publisher of another type on a tool's pose topic (the node receives serialised bytes,
+        rospy.AnyMsg): no crash, depth 0 for that tool, counted; the other tool is unaffected."""
+        bad = rospy.Publisher('/mesa_right/ee_pose', PointStamped, queue_size=10)
+        x, y = 0.01, 0.02
+        h = float(self.surf.height(x, y))
+        st = []
+        sub = rospy.Subscriber('/saras/status', ComponentStatus, st.append)
+        right = []
+        rsub = rospy.Subscriber('/mesa_right/contact', Contact, right.append)
+        end = rospy.Time.now() + rospy.Duration(2.5)
+        while rospy.Time.now() < end:
+            m = PointStamped()
+            m.header.stamp = rospy.Time.now()
+            m.header.frame_id = 'mesa_right/sbs_world'
+            m.point.z = h - 0.004
+            bad.publish(m)
+            rospy.sleep(0.02)
+        rsub.unregister()
+        sub.unregister()
+        bad.unregister()
+        self.assertGreater(len(right), 30)
+        self.assertTrue(all(c.depth == 0.0 for c in right))
+        mine = [s for s in st if s.component.endswith('contact_sim')]
+        self.assertTrue(mine and mine[-1].level == ComponentStatus.WARN and 'mesa_right' in mine[-1].message)
+        inside = self.contact_for([x, y, h - 0.004])   # the node still serves the left tool
+        self.assertGreater(inside.depth, 0.003)
 
     def test_audio_chunks(self):
         got = []
