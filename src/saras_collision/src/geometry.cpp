@@ -1,62 +1,22 @@
-// Exact capsule / sphere / box distances. See include/saras_collision/geometry.h for the
-// definitions and the return codes; the derivations are summarised next to each function.
+// Exact capsule-box and sphere-box distances and the box validation (capsule-capsule:
+// capsule_capsule.cpp). See include/saras_collision/geometry.h for the definitions and the
+// return codes; the derivations are summarised next to each function.
 #include "saras_collision/geometry.h"
 
-#include <Eigen/Geometry>
+#include "geometry_detail.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-// Hot helpers are forced inline: GCC -O2 keeps a large helper called from several places out
-// of line and then passes its results through the stack.
-#if defined(__GNUC__)
-#define SARAS_COLLISION_INLINE inline __attribute__((always_inline))
-#else
-#define SARAS_COLLISION_INLINE inline
-#endif
-
 namespace saras_collision
 {
+using namespace detail;  // NOLINT(build/namespaces): this library's own private helpers
+
 namespace
 {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-/// Squared length below which a capsule axis is treated as a point [m^2] (length < 1e-15 m).
-constexpr double kDegenerateLength2 = 1e-30;
-/// Squared axis-to-axis distance below which the capsule-capsule normal is taken from the axes
-/// directions, not from the (then meaningless) closest-point difference [m^2] (1e-100 m).
-constexpr double kMinAxis2 = 1e-200;
-
-inline bool validRadius(double r)
-{
-  return std::isfinite(r) && r >= 0.0;
-}
-
-/// All coordinates finite: NaN and +-inf propagate through the sum (finite values whose sum
-/// overflows, > 1e307 m, are rejected too, which is intended).
-inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
-{
-  return std::isfinite((a + b).sum() + (a - b).sum());
-}
-
-/**
- * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
- * front of the computation): the inputs are finite and the radii >= 0 iff the computed
- * distance is finite and the radii >= 0. Proof of "if": the axis parameters s, t are always
- * finite (clamped with maxsd / minsd, which return the bound for NaN), so a NaN / +-inf
- * coordinate of P1 or P2 makes a coordinate of q1 = P1 + s (P2 - P1) NaN or infinite (likewise
- * P3, P4 and q2), hence |q1 - q2| and the distance; a NaN / infinite radius makes the distance
- * NaN or -inf. Tested for every coordinate (gtest CapsuleCapsule.EveryNonFiniteInputIsRejected).
- */
-inline bool capsulePairValid(double distance, double r1, double r2)
-{
-  return std::isfinite(distance) && r1 >= 0.0 && r2 >= 0.0;
-}
-
 /// The 8 vertices all finite (pairwise sum, see allFinite).
 inline bool verticesFinite(const Eigen::Vector3d v[])
 {
@@ -64,91 +24,6 @@ inline bool verticesFinite(const Eigen::Vector3d v[])
   return std::isfinite(s.sum());
 }
 
-// Branch-free min / max (minsd / maxsd): GCC -O2 turns std::min / std::max into compare-and-
-// jump sequences, which random queries mispredict. Not for NaN arguments (inputs are checked).
-// GCC / Clang: one instruction in inline assembly (the intrinsics' _mm_set_sd adds a movq that
-// zeroes the unused upper lane to every call: ~5 % of the capsule-capsule instructions).
-inline double minD(double a, double b)
-{
-#if defined(__SSE2__) && defined(__GNUC__)
-  __asm__("minsd %1, %0" : "+x"(a) : "x"(b));  // a < b ? a : b, no zeroing of the upper lane
-  return a;
-#elif defined(__SSE2__)
-  return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(a), _mm_set_sd(b)));
-#else
-  return a < b ? a : b;
-#endif
-}
-
-inline double maxD(double a, double b)
-{
-#if defined(__SSE2__) && defined(__GNUC__)
-  __asm__("maxsd %1, %0" : "+x"(a) : "x"(b));  // a > b ? a : b
-  return a;
-#elif defined(__SSE2__)
-  return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b)));
-#else
-  return a > b ? a : b;
-#endif
-}
-
-/// x < y ? if_less : otherwise, without a branch (and / andnot / or on a compare mask).
-inline double selectLess(double x, double y, double if_less, double otherwise)
-{
-#if defined(__SSE2__)
-  const __m128d mask = _mm_cmplt_sd(_mm_set_sd(x), _mm_set_sd(y));
-  return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(mask, _mm_set_sd(if_less)), _mm_andnot_pd(mask, _mm_set_sd(otherwise))));
-#else
-  return x < y ? if_less : otherwise;
-#endif
-}
-
-inline double clamp01(double x)
-{
-  return minD(maxD(x, 0.0), 1.0);
-}
-
-inline double clampTo(double x, double h)
-{
-  return minD(maxD(x, -h), h);
-}
-
-DistanceResult invalid(int code)
-{
-  DistanceResult r;
-  r.code = code;
-  r.distance = kNaN;
-  r.point1 = Eigen::Vector3d::Constant(kNaN);
-  r.point2 = Eigen::Vector3d::Constant(kNaN);
-  r.normal = Eigen::Vector3d::Constant(kNaN);
-  return r;
-}
-
-/// Any unit vector orthogonal to a non-zero @p v.
-Eigen::Vector3d anyPerpendicular(const Eigen::Vector3d& v)
-{
-  Eigen::Vector3d other = std::abs(v.x()) <= std::abs(v.y()) && std::abs(v.x()) <= std::abs(v.z()) ?
-                              Eigen::Vector3d::UnitX() :
-                              (std::abs(v.y()) <= std::abs(v.z()) ? Eigen::Vector3d::UnitY() :
-                                                                    Eigen::Vector3d::UnitZ());
-  return v.cross(other).normalized();
-}
-
-/// Return code of a valid signed @p distance, without branches (random queries would
-/// mispredict them): kIntersecting below -tol, kTangent within +-tol, else @p separated_code
-/// (kSeparated or kParallel).
-inline int classify(double distance, int separated_code = kSeparated)
-{
-  return static_cast<int>(distance > kTangentTolerance) * separated_code -
-         static_cast<int>(distance < -kTangentTolerance);
-}
-
-/// 1 if the code keeps surface points (not intersecting), else 0: selects the witness points
-/// without a branch.
-inline double surfaceFactor(double distance)
-{
-  return selectLess(distance, -kTangentTolerance, 0.0, 1.0);
-}
 
 /// Edge vectors of 8 box vertices (documented order) and their squared lengths.
 struct BoxEdges
@@ -230,217 +105,6 @@ SARAS_COLLISION_INLINE void boxFrame(const Eigen::Vector3d v[], const BoxEdges& 
   box.half = Eigen::Vector3d(lx, ly, lz) * 0.5;
 }
 
-/**
- * Capsule-capsule core shared by capsuleCapsule() and the deliverable signature (inputs
- * already validated).
- *
- * Segment-segment: minimise |p1 + s d1 - p3 - t d2|^2 over [0,1]^2 (convex quadratic).
- * Interior stationary point from the 2x2 normal equations (denominator |d1 x d2|^2, taken from
- * the cross product when nearly parallel to avoid cancellation), clamped; then t is
- * re-optimised for s and, if t was clamped, s for t (Ericson, Real-Time Collision Detection
- * 5.1.9). The common path has no data-dependent branch (random queries mispredict them):
- * the three reciprocals are computed in parallel, the two candidates for s when t is clamped
- * (t = 0, t = 1) are computed alongside and selected with a mask, and 1 / |v| comes from
- * 1 / |v|^2, computed in parallel with the square root. Degenerate axes reduce to
- * point-segment projections.
- * @return the DistanceCode; @p normal from capsule 2 towards capsule 1
- */
-SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1, const Eigen::Vector3d& p3,
-                       const Eigen::Vector3d& p4, double r2, double& distance, Eigen::Vector3d& point1,
-                       Eigen::Vector3d& point2, Eigen::Vector3d& normal)
-{
-  const Eigen::Vector3d d1 = p2 - p1;
-  const Eigen::Vector3d d2 = p4 - p3;
-  const Eigen::Vector3d w = p1 - p3;
-  const double a = d1.squaredNorm();
-  const double e = d2.squaredNorm();
-  const double b = d1.dot(d2);
-  const double c = d1.dot(w);
-  const double f = d2.dot(w);
-  double s = 0.0, t = 0.0;
-  bool parallel = false;
-  const bool point1_axis = a <= kDegenerateLength2;
-  const bool point2_axis = e <= kDegenerateLength2;
-  if (!point1_axis && !point2_axis)
-  {
-    // |d1 x d2|^2 = a e - b^2; near parallel the difference cancels, so it is then recomputed
-    // from the cross product (relative error of a e - b^2 ~ 1e-16 / 1e-3 otherwise).
-    double denom = a * e - b * b;
-    if (denom < 1e-3 * a * e)
-      denom = d1.cross(d2).squaredNorm();
-    parallel = !(denom > kParallelSin2 * a * e);
-    // Parallel: any s is optimal up to the clamping of t, fixed below.
-    const double inv_denom = 1.0 / denom, inv_a = 1.0 / a, inv_e = 1.0 / e;  // in parallel
-    const double s_free = parallel ? 0.0 : (b * f - c * e) * inv_denom;
-    const double s_clamped = clamp01(s_free);
-    const double t_free = (b * s_clamped + f) * inv_e;
-    // Candidates for s when t is clamped to 0 or 1, computed in parallel with the above.
-    const double s_t0 = clamp01(-c * inv_a), s_t1 = clamp01((b - c) * inv_a);
-    t = clamp01(t_free);
-    s = selectLess(t_free, 0.0, s_t0, selectLess(1.0, t_free, s_t1, s_clamped));
-  }
-  else if (point1_axis && !point2_axis)
-  {
-    t = clamp01(f / e);
-  }
-  else if (point2_axis && !point1_axis)
-  {
-    s = clamp01(-c / a);
-  }
-  const Eigen::Vector3d q1 = p1 + s * d1;
-  const Eigen::Vector3d q2 = p3 + t * d2;
-  const Eigen::Vector3d v = q1 - q2;
-  const double axis2 = v.squaredNorm();
-  const double axis = std::sqrt(axis2);
-  distance = axis - r1 - r2;
-  const int code = classify(distance, parallel ? kParallel : kSeparated);
-  if (axis2 > kMinAxis2)
-    normal = v * (axis * (1.0 / axis2));  // the division overlaps the square root
-  else if (!point1_axis && !point2_axis && !parallel)
-    normal = d1.cross(d2).normalized();
-  else if (!point1_axis)
-    normal = anyPerpendicular(d1);
-  else if (!point2_axis)
-    normal = anyPerpendicular(d2);
-  else
-    normal = Eigen::Vector3d::UnitZ();
-  // Intersecting: witnesses = closest points of the axes; else surface points.
-  const double k = surfaceFactor(distance);
-  point1 = q1 - (k * r1) * normal;
-  point2 = q2 + (k * r2) * normal;
-  return code;
-}
-
-/**
- * Fast path of capsulePair() for the general case: non-degenerate axes more than ~1.8 degrees
- * from parallel (sin^2 > 1e-3, so that a e - b^2 does not cancel) whose closest points do not
- * coincide. Same minimiser (Ericson 5.1.9), written for a short dependency chain and few
- * instructions: every clamp is taken division-free on a numerator over the common denominator
- * M = a e D (D = a e - b^2 = |d1 x d2|^2), and the one reciprocal 1 / M runs in parallel:
- *   sn = b f - c e (unconstrained s* = sn / D), sc = clamp(sn, 0, D);
- *   tn = b sc + f D (t re-optimised for the clamped s, times e D);
- *   tc = clamp(tn, 0, e D)                          (t = tc / (e D) = T / M, T = tc a);
- *   S = clamp(b tc - c e D, 0, M)                   (s = clamp((b t - c) / a, 0, 1) = S / M).
- * The last line is Ericson's "recompute s for the clamped t" and, when t was not clamped, it
- * gives back sc / D: either s* is interior and (s, t) is the stationary point, where
- * (b t - c) / a = s exactly, or sc is a bound and the KKT condition of the convex problem at
- * that bound (dF/ds >= 0 at s = 0, <= 0 at s = 1) puts (b t - c) / a beyond it. No selects.
- * The axis difference scaled by M, V = M w + S d1 - T d2 = M (q1 - q2), is formed without
- * waiting for the division, so the square root of |V|^2 starts early; |q1 - q2| = |V| / M and
- * the unit normal V / |V| (1 / |V| = sqrt(|V|^2) / |V|^2, the division overlapping the square
- * root). M is a normal number (a, e > 1e-30, D > 1e-3 a e) and |V|^2 is required to be one.
- * @return false (outputs untouched) when the case is not general, an input is not finite or a
- *         product overflows or underflows (every comparison below is false on NaN);
- *         capsulePair() (through capsulePairAnyScale()) then handles it.
- */
-SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
-                                            const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2,
-                                            double& distance, Eigen::Vector3d& point1, Eigen::Vector3d& point2,
-                                            Eigen::Vector3d& normal)
-{
-  // Scalar code: GCC -O2 emits fewer instructions for it than for the Eigen 3-vector
-  // expressions.
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  const double p1x = p1[0], p1y = p1[1], p1z = p1[2], p3x = p3[0], p3y = p3[1], p3z = p3[2];
-  const double d1x = p2[0] - p1x, d1y = p2[1] - p1y, d1z = p2[2] - p1z;
-  const double d2x = p4[0] - p3x, d2y = p4[1] - p3y, d2z = p4[2] - p3z;
-  const double wx = p1x - p3x, wy = p1y - p3y, wz = p1z - p3z;
-  const double a = d1x * d1x + d1y * d1y + d1z * d1z;
-  const double e = d2x * d2x + d2y * d2y + d2z * d2z;
-  const double b = d1x * d2x + d1y * d2y + d1z * d2z;
-  const double c = d1x * wx + d1y * wy + d1z * wz;
-  const double f = d2x * wx + d2y * wy + d2z * wz;
-  const double ae = a * e;
-  const double denom = ae - b * b;  // |d1 x d2|^2; cancels near parallel: then capsulePair()
-  const double ed = e * denom;
-  const double m = ae * denom;
-  const double sn = b * f - c * e;
-  const double sc = minD(maxD(sn, 0.0), denom);
-  const double tn = b * sc + f * denom;
-  const double rho = 1.0 / m;  // in parallel with everything up to the square root
-  const double tc = minD(maxD(tn, 0.0), ed);  // t = tc / (e D) = tc a / M
-  const double T = tc * a;
-  const double sv = b * tc - c * ed;
-  const double S = minD(maxD(sv, 0.0), m);  // s = clamp((b t - c) / a) = S / M
-  const double vx = (m * wx + S * d1x) - T * d2x;
-  const double vy = (m * wy + S * d1y) - T * d2y;
-  const double vz = (m * wz + S * d1z) - T * d2z;
-  const double v2 = vx * vx + vy * vy + vz * vz;
-  // One predictable branch for every special case (each test is false on NaN; sn, tn, sv
-  // finite: no product overflowed, so no clamp above turned an overflow into a number; an
-  // overflow in V makes |V|^2 infinite).
-  if (!((minD(a, e) > kDegenerateLength2) & (denom > 1e-3 * ae) & (m < kInf) &
-        ((std::abs(sn) + std::abs(tn)) + std::abs(sv) < kInf) & (v2 > 1e-290) & (v2 < kInf)))
-    return false;
-  const double len = std::sqrt(v2);
-  const double inv_v2 = 1.0 / v2;  // overlaps the square root, as do the next products
-  const double rr = r1 + r2, r1_v2 = r1 * inv_v2, r2_v2 = r2 * inv_v2;
-  const double dist = len * rho - rr;
-  const double inv_len = len * inv_v2;
-  // Radius offsets along the normal, r_i V / |V| = V (len r_i / |V|^2), zeroed without a
-  // multiplication when intersecting (witness points on the axes).
-  const double k1 = selectLess(dist, -kTangentTolerance, 0.0, len * r1_v2);
-  const double k2 = selectLess(dist, -kTangentTolerance, 0.0, len * r2_v2);
-  const double s = clamp01(S * rho), t = clamp01(T * rho);
-  normal = Eigen::Vector3d(vx * inv_len, vy * inv_len, vz * inv_len);
-  point1 = Eigen::Vector3d((p1x + s * d1x) - k1 * vx, (p1y + s * d1y) - k1 * vy, (p1z + s * d1z) - k1 * vz);
-  point2 = Eigen::Vector3d((p3x + t * d2x) + k2 * vx, (p3y + t * d2y) + k2 * vy, (p3z + t * d2z) + k2 * vz);
-  distance = dist;
-  return true;
-}
-
-/// Writes the error outputs of the deliverable signatures (NaN distance and points).
-inline int invalidOutputs(int code, double& distance, Eigen::Vector3d& point1, Eigen::Vector3d& point2)
-{
-  distance = kNaN;
-  point1 = Eigen::Vector3d::Constant(kNaN);
-  point2 = Eigen::Vector3d::Constant(kNaN);
-  return code;
-}
-
-/**
- * capsulePair() for any finite magnitude: when a coordinate exceeds 2^200 (~1.6e60 m) in
- * magnitude, its products (a e, |d1 x d2|^2 ~ length^4) could overflow, so the inputs are
- * scaled by a power of two (exact) to magnitudes below 1, solved, and the distance and points
- * scaled back (the problem is homogeneous; the normal is scale-free). A result that is not
- * representable (distance beyond ~1.8e308) becomes non-finite and is then rejected as invalid
- * input. Non-finite inputs are passed through unchanged (capsulePair() propagates them).
- */
-int capsulePairAnyScale(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1, const Eigen::Vector3d& p3,
-                        const Eigen::Vector3d& p4, double r2, double& distance, Eigen::Vector3d& point1,
-                        Eigen::Vector3d& point2, Eigen::Vector3d& normal)
-{
-  const double mag = std::max(std::max(p1.cwiseAbs().maxCoeff(), p2.cwiseAbs().maxCoeff()),
-                              std::max(p3.cwiseAbs().maxCoeff(), p4.cwiseAbs().maxCoeff()));
-  constexpr double kLarge = 0x1p200;
-  if (!(mag > kLarge) || !(mag < std::numeric_limits<double>::infinity()))
-    return capsulePair(p1, p2, r1, p3, p4, r2, distance, point1, point2, normal);
-  const int k = std::ilogb(mag) + 1;  // mag * 2^-k < 1
-  const double down = std::ldexp(1.0, -k), up = std::ldexp(1.0, k);
-  const int code = capsulePair(p1 * down, p2 * down, r1 * down, p3 * down, p4 * down, r2 * down, distance, point1,
-                               point2, normal);
-  distance *= up;
-  point1 *= up;
-  point2 *= up;
-  return code;
-}
-
-/// dist_capsule_to_capsule() outside the general case (capsulePair(), then the input check).
-/// Kept out of line so that the general case does not keep the inputs alive in registers or
-/// on the stack for it.
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-int capsuleCapsuleCareful(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2, const Eigen::Vector3d& P3,
-                          const Eigen::Vector3d& P4, double r1, double r2, double& distance,
-                          Eigen::Vector3d& point1, Eigen::Vector3d& point2)
-{
-  Eigen::Vector3d normal;
-  const int code = capsulePairAnyScale(P1, P2, r1, P3, P4, r2, distance, point1, point2, normal);
-  if (!capsulePairValid(distance, r1, r2))
-    return invalidOutputs(kInvalidInput, distance, point1, point2);
-  return code;
-}
 
 /// min over t in [0,1] of G(t) = max_i(|a_i + t d_i| - h_i) (see capsuleBox), with its argmin.
 /// @param t_hint an extra candidate
@@ -540,19 +204,6 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
   vertices[7] = v0 + y + z;
 }
 
-// Segment-segment: see capsulePair().
-DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
-                              const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2)
-{
-  DistanceResult out;
-  if (capsulePairFast(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal))
-    out.code = classify(out.distance);
-  else
-    out.code = capsulePairAnyScale(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal);
-  if (!capsulePairValid(out.distance, r1, r2))
-    return invalid(kInvalidInput);
-  return out;
-}
 
 // Capsule-box, in the box frame (centre c, axes R, half extents h). With x(t) = a + t d the
 // axis in box coordinates, the squared axis-box distance is
@@ -712,6 +363,7 @@ DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3
 
 }  // namespace
 
+SARAS_COLLISION_MULTIVERSION
 DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r, const OrientedBox& box)
 {
   if (!allFinite(p1, p2) || !validRadius(r))
@@ -719,21 +371,10 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
   return capsuleBoxChecked(p1, p2, r, box);
 }
 
-int dist_capsule_to_capsule(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2, const Eigen::Vector3d& P3,
-                            const Eigen::Vector3d& P4, double r1, double r2, double& distance,
-                            Eigen::Vector3d& point_on_capsule1, Eigen::Vector3d& point_on_capsule2)
-{
-  // Inputs are checked after the computation (see capsulePairValid), off the critical path.
-  Eigen::Vector3d normal;  // not an output of this signature
-  if (!capsulePairFast(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal))
-    return capsuleCapsuleCareful(P1, P2, P3, P4, r1, r2, distance, point_on_capsule1, point_on_capsule2);
-  if (!capsulePairValid(distance, r1, r2))
-    return invalidOutputs(kInvalidInput, distance, point_on_capsule1, point_on_capsule2);
-  return classify(distance);
-}
 
 // The box is validated (branch-free fast path) and its frame built on every call; the query is
 // then capsuleBox(). Prebuild an OrientedBox with makeBox() for repeated queries.
+SARAS_COLLISION_MULTIVERSION
 int dist_capsule_to_parallelepiped(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                                    const Eigen::Vector3d vertices[], double r, double& distance,
                                    Eigen::Vector3d& point_on_capsule, Eigen::Vector3d& point_on_parall)
@@ -828,6 +469,7 @@ int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[],
 // Common case (valid inputs and box, centre outside the box) with one predictable branch; the
 // box test and the projection are independent, so they overlap. Everything else is
 // sphereBoxCareful(), which recomputes from the inputs.
+SARAS_COLLISION_MULTIVERSION
 int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
                                   double& distance, Eigen::Vector3d& point_on_sphere,
                                   Eigen::Vector3d& point_on_parall)
@@ -857,7 +499,8 @@ int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3
     return sphereBoxCareful(s, vertices, r, distance, point_on_sphere, point_on_parall);
   const double axis = std::sqrt(axis2);
   const double dist = axis - r;
-  const double scale = surfaceFactor(dist) * r * (axis * (1.0 / axis2));  // division overlaps the sqrt
+  // r / axis = r axis / axis2 (the division overlaps the square root); 0 when intersecting.
+  const double scale = selectLess(dist, -kTangentTolerance, 0.0, axis) * (r * (1.0 / axis2));
   distance = dist;
   point_on_parall = s - off;
   point_on_sphere = s - scale * off;

@@ -1,0 +1,173 @@
+// Private header of the saras_collision library (not installed): the branch-free helpers and
+// build macros shared by geometry.cpp (boxes) and capsule_capsule.cpp. ROS-agnostic.
+#ifndef SARAS_COLLISION_SRC_GEOMETRY_DETAIL_H
+#define SARAS_COLLISION_SRC_GEOMETRY_DETAIL_H
+
+#include "saras_collision/geometry.h"
+
+#include <Eigen/Geometry>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <cmath>
+#include <limits>
+
+// Hot helpers are forced inline: GCC -O2 keeps a large helper called from several places out
+// of line and then passes its results through the stack.
+#if defined(__GNUC__)
+#define SARAS_COLLISION_INLINE inline __attribute__((always_inline))
+#else
+#define SARAS_COLLISION_INLINE inline
+#endif
+
+// Function multiversioning of the exported distance functions (GCC >= 12 on x86-64 ELF): one
+// clone for x86-64-v3 (AVX2, FMA: fused multiply-adds, three-operand VEX code, fewer
+// instructions), one for the baseline x86-64 the distribution builds for; the dynamic loader
+// picks one once, through an ifunc (calls then cost the same as any exported function's).
+// The hot paths are forced inline into each clone, so each clone has its own code for them.
+// Results of the two clones differ only by rounding (fused multiply-adds), within the tests'
+// tolerances on either; the two clones of functions compared bit for bit by the tests
+// (capsuleCapsule and dist_capsule_to_capsule) run the same code on a given machine. Define
+// SARAS_COLLISION_NO_MULTIVERSION to build the baseline code alone (the gtest
+// saras_collision_test_geometry_baseline does, to test it on any machine).
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__x86_64__) && defined(__ELF__) && \
+    !defined(SARAS_COLLISION_NO_MULTIVERSION)
+#define SARAS_COLLISION_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
+// minD / maxD below then use GCC's "%v" / "%d" asm operand forms, which print the VEX
+// three-operand encoding in the AVX clone and the SSE2 one in the baseline clone: legacy SSE
+// instructions inside AVX code can cost a state transition (measured here: a sphere-box query
+// with 256-bit code and legacy minsd took 150 ns instead of 25 ns).
+#define SARAS_COLLISION_VEX_ASM 1
+#else
+#define SARAS_COLLISION_MULTIVERSION
+#endif
+
+namespace saras_collision
+{
+namespace detail
+{
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Squared length below which a capsule axis is treated as a point [m^2] (length < 1e-15 m).
+constexpr double kDegenerateLength2 = 1e-30;
+/// Squared axis-to-axis distance below which the capsule-capsule normal is taken from the axes
+/// directions, not from the (then meaningless) closest-point difference [m^2] (1e-100 m).
+constexpr double kMinAxis2 = 1e-200;
+
+inline bool validRadius(double r)
+{
+  return std::isfinite(r) && r >= 0.0;
+}
+
+/// All coordinates finite: NaN and +-inf propagate through the sum (finite values whose sum
+/// overflows, > 1e307 m, are rejected too, which is intended).
+inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
+{
+  return std::isfinite((a + b).sum() + (a - b).sum());
+}
+
+// Branch-free min / max (minsd / maxsd): GCC -O2 turns std::min / std::max into compare-and-
+// jump sequences, which random queries mispredict. Not for NaN arguments (inputs are checked).
+// GCC / Clang: one instruction in inline assembly (the intrinsics' _mm_set_sd adds a movq that
+// zeroes the unused upper lane to every call: ~5 % of the capsule-capsule instructions).
+inline double minD(double a, double b)
+{
+#if defined(SARAS_COLLISION_VEX_ASM)
+  __asm__("%vminsd %1, %d0" : "+x"(a) : "x"(b));  // a < b ? a : b; VEX-encoded in the AVX clone
+  return a;
+#elif defined(__SSE2__) && defined(__GNUC__)
+  __asm__("minsd %1, %0" : "+x"(a) : "x"(b));  // a < b ? a : b, no zeroing of the upper lane
+  return a;
+#elif defined(__SSE2__)
+  return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(a), _mm_set_sd(b)));
+#else
+  return a < b ? a : b;
+#endif
+}
+
+inline double maxD(double a, double b)
+{
+#if defined(SARAS_COLLISION_VEX_ASM)
+  __asm__("%vmaxsd %1, %d0" : "+x"(a) : "x"(b));  // a > b ? a : b
+  return a;
+#elif defined(__SSE2__) && defined(__GNUC__)
+  __asm__("maxsd %1, %0" : "+x"(a) : "x"(b));  // a > b ? a : b
+  return a;
+#elif defined(__SSE2__)
+  return _mm_cvtsd_f64(_mm_max_sd(_mm_set_sd(a), _mm_set_sd(b)));
+#else
+  return a > b ? a : b;
+#endif
+}
+
+/// x < y ? if_less : otherwise, without a branch (and / andnot / or on a compare mask).
+inline double selectLess(double x, double y, double if_less, double otherwise)
+{
+#if defined(__SSE2__)
+  const __m128d mask = _mm_cmplt_sd(_mm_set_sd(x), _mm_set_sd(y));
+  return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(mask, _mm_set_sd(if_less)), _mm_andnot_pd(mask, _mm_set_sd(otherwise))));
+#else
+  return x < y ? if_less : otherwise;
+#endif
+}
+
+inline double clamp01(double x)
+{
+  return minD(maxD(x, 0.0), 1.0);
+}
+
+inline double clampTo(double x, double h)
+{
+  return minD(maxD(x, -h), h);
+}
+
+inline DistanceResult invalid(int code)
+{
+  DistanceResult r;
+  r.code = code;
+  r.distance = kNaN;
+  r.point1 = Eigen::Vector3d::Constant(kNaN);
+  r.point2 = Eigen::Vector3d::Constant(kNaN);
+  r.normal = Eigen::Vector3d::Constant(kNaN);
+  return r;
+}
+
+/// Any unit vector orthogonal to a non-zero @p v.
+inline Eigen::Vector3d anyPerpendicular(const Eigen::Vector3d& v)
+{
+  Eigen::Vector3d other = std::abs(v.x()) <= std::abs(v.y()) && std::abs(v.x()) <= std::abs(v.z()) ?
+                              Eigen::Vector3d::UnitX() :
+                              (std::abs(v.y()) <= std::abs(v.z()) ? Eigen::Vector3d::UnitY() :
+                                                                    Eigen::Vector3d::UnitZ());
+  return v.cross(other).normalized();
+}
+
+/// Return code of a valid signed @p distance, without branches (random queries would
+/// mispredict them): kIntersecting below -tol, kTangent within +-tol, else @p separated_code
+/// (kSeparated or kParallel).
+inline int classify(double distance, int separated_code = kSeparated)
+{
+  return static_cast<int>(distance > kTangentTolerance) * separated_code -
+         static_cast<int>(distance < -kTangentTolerance);
+}
+
+/// 1 if the code keeps surface points (not intersecting), else 0: selects the witness points
+/// without a branch.
+inline double surfaceFactor(double distance)
+{
+  return selectLess(distance, -kTangentTolerance, 0.0, 1.0);
+}
+
+/// Writes the error outputs of the deliverable signatures (NaN distance and points).
+inline int invalidOutputs(int code, double& distance, Eigen::Vector3d& point1, Eigen::Vector3d& point2)
+{
+  distance = kNaN;
+  point1 = Eigen::Vector3d::Constant(kNaN);
+  point2 = Eigen::Vector3d::Constant(kNaN);
+  return code;
+}
+}  // namespace detail
+}  // namespace saras_collision
+
+#endif  // SARAS_COLLISION_SRC_GEOMETRY_DETAIL_H
