@@ -159,7 +159,7 @@ def main():
         if not data:
             print('case %s %s failed' % (c, renderer), file=sys.stderr)
             continue
-        rates, cpu, l0, l1 = eval(data.decode())   # our own repr of floats
+        rates, cpu, l0, l1 = eval(data.decode(), {'nan': float('nan'), 'inf': float('inf')})  # our own repr
         rows.append((c, renderer, SIZES[height], fps, moving, rates, cpu, l0, l1))
         print('done %s %s' % (c, renderer), file=sys.stderr)
     print('\n| renderer | case | ECM | target fps | image_raw L / R [Hz] | compressed L / R [Hz] | '

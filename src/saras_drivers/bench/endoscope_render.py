@@ -1,15 +1,23 @@
 #!/usr/bin/env python3
-"""Benchmark of the stereo endoscope renderer (endoscope_sim's per-frame work), 1 process.
+"""Benchmark of the stereo endoscope renderers (endoscope_sim's per-frame work), 1 process.
+
+First the compiled core (the ``endoscope_render`` CLI of saras_drivers_endoscope_core, the
+default renderer of endoscope_sim) if it is built: one eye, ECM viewpoint of the platform with
+the 13 pelvic-bone boxes and 2 shafts, or the tissue alone, moving (static layer re-rendered
+every frame) and still; process CPU per frame and the thread CPU of each stage (tissue solve,
+colour, bones, copy, shafts). Then the Python reference renderer:
 
 For each resolution: time per stereo frame (left + right) when the camera is still (cached
 static layer + 4 instrument shafts; the usual case, the ECM moves now and then) and when it
 moves (static layer re-rendered every frame), one eye after the other and in two threads as
 endoscope_sim does, plus the publishing costs (Image bytes copy, JPEG encode at quality 85 and
 75 for image_raw/compressed). CPU = process CPU time per pair (all threads).
-Usage: endoscope_render.py [--frames N]
+Usage: endoscope_render.py [--frames N] [--cpp-only]
 """
 import argparse
 import os
+import re
+import subprocess
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -33,10 +41,60 @@ def measure(fn, n):
     return w / n, c / n
 
 
+def find_cli():
+    prefixes = [p for p in os.environ.get('CMAKE_PREFIX_PATH', '').split(':') if p]
+    if os.environ.get('DEVEL_DIR'):
+        prefixes.insert(0, os.environ['DEVEL_DIR'])
+    for p in prefixes:
+        exe = os.path.join(p, 'lib', 'saras_drivers', 'endoscope_render')
+        if os.access(exe, os.X_OK):
+            return exe
+    return None
+
+
+def bench_cpp(frames):
+    """Table of the C++ core (endoscope_render --frames N), one eye."""
+    cli = find_cli()
+    if cli is None:
+        print('endoscope_render (C++ core) not built: skipped')
+        return
+    pose = '0.08338741 0.0001007 0.17004034 -0.94724192 0.00053920 0.32051871 0.00039718'  # platform ECM view
+    pelvis = os.path.join(CFG, '..', '..', 'saras_collision', 'config', 'pelvis_vertices.txt')
+    shafts = ['0.0258 -0.0335 0.0957 0.1 -0.08 0.22 0.004', '0.03 0.035 0.095 0.10 0.08 0.22 0.004']
+    print('C++ core (endoscope_render), one eye, %d frames per case, load average: %s' % (
+        frames, ' '.join('%.2f' % v for v in os.getloadavg())))
+    print('| resolution | scene | ECM | CPU per eye [ms] | tissue | colour | bones | copy | shafts |')
+    print('|---|---|---|---|---|---|---|---|---|')
+    for (w, h) in ((1280, 720), (1920, 1080)):
+        for scene in ('tissue', 'bones'):
+            if scene == 'bones' and not os.path.isfile(pelvis):
+                continue
+            for moving in (True, False):
+                cmd = [cli, '--camera-info', os.path.join(CFG, 'endoscope_left.yaml'), '--width', str(w),
+                       '--height', str(h), '--pose', pose, '--frames', str(frames)]
+                for sh in shafts:
+                    cmd += ['--shaft', sh]
+                if scene == 'bones':  # bones_marker_frame 10 cm above world, in view of the ECM
+                    cmd += ['--boxes', pelvis, '--boxes-pose', '-0.02 0 0.1 0 0 0 1']
+                if moving:
+                    cmd.append('--moving')
+                out = subprocess.run(cmd, check=True, stdout=subprocess.PIPE, universal_newlines=True).stdout
+                cpu = float(re.search(r'([0-9.]+) ms/frame CPU', out).group(1))
+                st = dict((k, float(v)) for k, v in re.findall(r'(\w+) ([0-9.e+-]+)', out.split('stages')[1]))
+                print('| %dx%d | %s | %s | %.1f | %.1f | %.1f | %.1f | %.2f | %.2f |' % (
+                    w, h, scene, 'moving' if moving else 'still', cpu, st['tissue'], st['colour'], st['boxes'],
+                    st['copy'], st['shafts']))
+    print('(stage columns: thread CPU ms per frame; a still camera re-uses the cached static layer)\n')
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--frames', type=int, default=20)
+    ap.add_argument('--cpp-only', action='store_true', help='only the C++ core table')
     args = ap.parse_args()
+    bench_cpp(max(args.frames, 50))
+    if args.cpp_only:
+        return
     kin = dm.StandInKinematics()
     T_ecm = rigid.make_transform(t=[0.14, 0.0, 0.24])
     yaw, pitch = dm.direction_to_yaw_pitch([-0.13, 0.0, -0.17])

@@ -1,6 +1,7 @@
 # Build rules of the C++ endoscope component (owned by its engineer); included from CMakeLists.txt.
 #   saras_drivers_endoscope_core     ROS-agnostic core: camera model (camera_calibration YAML),
-#                                    tissue / bones / targets, ray-casting renderer
+#                                    tissue / bones (saras_collision's vertices file) / targets,
+#                                    ray-casting renderer
 #   saras_drivers_endoscope_nodelet  nodelet saras_drivers/EndoscopeSim (nodelet_plugins.xml)
 #   endoscope_sim_node               thin node executable that loads the nodelet in-process
 #   endoscope_render                 CLI: one frame of the core (Python comparison, timing)
@@ -12,8 +13,11 @@ add_library(${PROJECT_NAME}_endoscope_core
   src/endoscope/endoscope_renderer.cpp
   src/endoscope/endoscope_scene.cpp)
 target_include_directories(${PROJECT_NAME}_endoscope_core PUBLIC include)
-target_include_directories(${PROJECT_NAME}_endoscope_core SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
-target_link_libraries(${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
+# saras_collision (ROS-agnostic core library): its forbidden-region vertices-file parser and box
+# model (its headers come with catkin_INCLUDE_DIRS; the core uses no ROS header)
+target_include_directories(${PROJECT_NAME}_endoscope_core SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS}
+  ${catkin_INCLUDE_DIRS})
+target_link_libraries(${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES} ${saras_collision_LIBRARIES})
 target_compile_options(${PROJECT_NAME}_endoscope_core PRIVATE -Wall -Wextra -O3)
 
 add_library(${PROJECT_NAME}_endoscope_nodelet src/endoscope/endoscope_sim_nodelet.cpp)

@@ -63,15 +63,20 @@ struct Box
 };
 
 /**
- * Pelvic-bone boxes from saras_collision's vertices file: first number NUM, then NUM x 8 lines
- * "x y z" in bones_marker_frame ('#' starts a comment), times @p scaling (file unit -> metres).
- * Returns NUM arrays of 8 vertices [m].
- * @throws std::invalid_argument "<path>: <problem>" (unreadable, empty, not numeric, wrong count,
- *         not finite)
+ * Pelvic-bone boxes from saras_collision's forbidden-region vertices file (D7.2 Section 6.1,
+ * parsed by saras_collision::loadVerticesFile: NUM, then NUM x 8 lines "x y z" in the order
+ * v0, v0+x, v0+x+z, v0+z, v0+y, v0+x+y, v0+x+y+z, v0+y+z, '#' comments), times @p scaling
+ * (file unit -> metres). Returns NUM arrays of the 8 vertices [m] in that order.
+ * @throws std::invalid_argument with saras_collision's message ("<path>: line N: <problem>":
+ *         unreadable, empty, not numeric, wrong count, not finite, not a rectangular box, trailing data)
  */
 std::vector<std::array<Eigen::Vector3d, 8>> loadBoxes(const std::string& path, double scaling = 1.0);
 
-/// Oriented box of 8 vertices (any order): edges at vertex 0 if orthogonal, else principal axes.
+/**
+ * Oriented box of 8 vertices in the vertices-file order (saras_collision::makeBox, relative
+ * tolerance saras_collision::kBoxRelativeTolerance).
+ * @throws std::invalid_argument if they are not a rectangular box in that order
+ */
 Box boxFromVertices(const std::array<Eigen::Vector3d, 8>& v);
 
 /**

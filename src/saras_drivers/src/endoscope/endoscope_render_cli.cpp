@@ -11,7 +11,8 @@
  *   [--out image.png] [--frames N [--moving]]
  * Poses are T_world_<frame> [m, quaternion / fixed-axis rpy rad]. With --frames N it prints the
  * mean wall and CPU (process, all threads) time per render [ms] (static layer cached: still camera; --moving: the camera pose
- * changes every frame, as a moving ECM).
+ * changes every frame, as a moving ECM) and the thread CPU time of each stage of the renderer. OpenCV runs
+ * single-threaded, as in endoscope_sim's eye threads.
  */
 #include <chrono>
 #include <ctime>
@@ -20,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "saras_drivers/endoscope_renderer.h"
@@ -109,6 +111,9 @@ int main(int argc, char** argv)
     }
     if (info.empty() || pose.empty())
       throw std::invalid_argument("--camera-info and --pose are required");
+    // single-threaded OpenCV, as in endoscope_sim's eye threads (~parallel_eyes): the process CPU
+    // time per frame is then the eye thread's
+    cv::setNumThreads(1);
     CameraModel cam = CameraModel::fromYamlFile(info);
     if (width > 0 && height > 0 && (width != cam.width() || height != cam.height()))
       cam = cam.scaled(width, height);
@@ -139,6 +144,7 @@ int main(int argc, char** argv)
     r.render(T, shafts, img);
     if (frames > 0)
     {
+      r.resetStats();
       const auto t0 = std::chrono::steady_clock::now();
       const std::clock_t c0 = std::clock();
       for (int k = 0; k < frames; ++k)
@@ -153,6 +159,10 @@ int main(int argc, char** argv)
       std::cout << "render " << cam.width() << "x" << cam.height() << (moving ? " moving" : " still") << ": "
                 << ms / frames << " ms/frame wall, " << cpu / frames << " ms/frame CPU (all threads), "
                 << r.backgroundRenders() << " static layers" << std::endl;
+      const auto& st = r.stats();
+      std::cout << "  stages [ms/frame, thread CPU]: tissue " << st.tissue_ms / frames << ", colour " << st.colour_ms / frames
+                << ", boxes " << st.boxes_ms / frames << ", target " << st.target_ms / frames << ", copy "
+                << st.copy_ms / frames << ", shafts " << st.shafts_ms / frames << std::endl;
     }
     if (!out.empty() && !cv::imwrite(out, img))
       throw std::runtime_error("cannot write " + out);

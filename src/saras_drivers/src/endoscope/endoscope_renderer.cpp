@@ -5,6 +5,7 @@
 #include "saras_drivers/endoscope_renderer.h"
 
 #include <algorithm>
+#include <ctime>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -17,6 +18,26 @@ namespace endoscope
 {
 namespace
 {
+/// CPU time of the calling thread (profiling: independent of the other processes' load).
+struct Clock
+{
+  using time_point = double;  ///< [ms]
+  static time_point now()
+  {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return 1e3 * ts.tv_sec + 1e-6 * ts.tv_nsec;
+  }
+};
+/// [ms] of thread CPU time since @p t0; resets @p t0 to now.
+double lap(Clock::time_point& t0)
+{
+  const Clock::time_point t = Clock::now();
+  const double ms = t - t0;
+  t0 = t;
+  return ms;
+}
+
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 /// Bilinear sample of a CV_32F map with clamped (replicated) borders at texel coordinates (x, y).
@@ -31,16 +52,59 @@ inline float sampleClamp(const float* m, int n, float x, float y)
   return (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
 }
 
-inline Eigen::Vector3f sampleClamp3(const cv::Vec3f* m, int n, float x, float y)
+/// Bilinear sample (as sampleClamp) and its gradient (per texel) from the same four taps.
+inline float sampleGradClamp(const float* m, int n, float x, float y, float& gx, float& gy)
 {
   x = std::min(std::max(x, 0.f), float(n - 1));
   y = std::min(std::max(y, 0.f), float(n - 1));
   const int i0 = std::min(int(x), n - 2), j0 = std::min(int(y), n - 2);
   const float a = x - i0, b = y - j0;
-  const cv::Vec3f* r0 = m + size_t(j0) * n + i0;
-  const cv::Vec3f* r1 = r0 + n;
-  const cv::Vec3f v = (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
-  return Eigen::Vector3f(v[0], v[1], v[2]);
+  const float* r0 = m + size_t(j0) * n + i0;
+  const float* r1 = r0 + n;
+  gx = (1 - b) * (r0[1] - r0[0]) + b * (r1[1] - r1[0]);
+  gy = (1 - a) * (r1[0] - r0[0]) + a * (r1[1] - r0[1]);
+  return (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
+}
+
+/// Gradient (d/dx, d/dy per texel) of the bilinear interpolant at (x, y): the same four taps as
+/// the height sample (the normal costs no memory traffic beyond the height sample's).
+inline void gradientClamp(const float* m, int n, float x, float y, float& gx, float& gy)
+{
+  sampleGradClamp(m, n, x, y, gx, gy);
+}
+
+/// Convex hull (Andrew's monotone chain, counter-clockwise, no collinear points) of @p pts in
+/// double precision (cv::convexHull takes float / int points only). @p pts is sorted in place.
+void convexHull2d(std::vector<cv::Point2d>& pts, std::vector<cv::Point2d>& hull)
+{
+  hull.clear();
+  const size_t n = pts.size();
+  if (n < 3)
+  {
+    hull = pts;
+    return;
+  }
+  std::sort(pts.begin(), pts.end(), [](const cv::Point2d& a, const cv::Point2d& b) {
+    return a.x < b.x || (a.x == b.x && a.y < b.y);
+  });
+  auto cross = [](const cv::Point2d& o, const cv::Point2d& a, const cv::Point2d& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+  };
+  hull.resize(2 * n);
+  size_t k = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0)
+      --k;
+    hull[k++] = pts[i];
+  }
+  for (size_t i = n - 1, t = k + 1; i > 0; --i)
+  {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i - 1]) <= 0)
+      --k;
+    hull[k++] = pts[i - 1];
+  }
+  hull.resize(k > 1 ? k - 1 : k);
 }
 }  // namespace
 
@@ -67,6 +131,14 @@ SceneRenderer::SceneRenderer(const CameraModel& camera, const TissueSurface& sur
   if (cam_.width() / tissue_step_ < 2 || cam_.height() / tissue_step_ < 2)
     throw std::invalid_argument("image too small for the tissue grid");
   cam_.pixelRays(1, rays_x_, rays_y_);
+  for (int a = 0; a < 2; ++a)
+  {
+    double lo, hi;
+    cv::minMaxLoc(a ? rays_y_ : rays_x_, &lo, &hi);
+    const double margin = 0.01 * (hi - lo);  // the rays of the 2 px margin of the row spans
+    ray_lo_[a] = lo - margin;
+    ray_hi_[a] = hi + margin;
+  }
   cam_.pixelRays(tissue_step_, rays_lo_x_, rays_lo_y_);
   if (rays_lo_x_.cols % 2 == 0 && rays_lo_x_.rows % 2 == 0 && rays_lo_x_.cols >= 160)
   {
@@ -85,15 +157,26 @@ SceneRenderer::SceneRenderer(const CameraModel& camera, const TissueSurface& sur
   tex_x0_ = surface_.cx() - opt_.texture_extent / 2.0;
   tex_y0_ = surface_.cy() - opt_.texture_extent / 2.0;
   hmap_.create(n, n, CV_32F);
-  nmap_.create(n, n, CV_32FC3);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
     {
       const double x = tex_x0_ + (i + 0.5) * tex_res_, y = tex_y0_ + (j + 0.5) * tex_res_;
       hmap_.at<float>(j, i) = static_cast<float>(surface_.height(x, y));
-      const Eigen::Vector3d nn = surface_.normal(x, y);
-      nmap_.at<cv::Vec3f>(j, i) = cv::Vec3f(float(nn.x()), float(nn.y()), float(nn.z()));
     }
+  // tissue-grid interpolation taps and weights of every full-resolution column / row
+  // (cv::resize INTER_LINEAR convention), for the z-test of bones and target
+  auto taps = [&](int count, int cells, std::vector<int>& i0, std::vector<float>& a) {
+    i0.resize(count);
+    a.resize(count);
+    for (int u = 0; u < count; ++u)
+    {
+      const float f = std::min(std::max((u + 0.5f) / tissue_step_ - 0.5f, 0.f), float(cells - 1));
+      i0[u] = std::min(int(f), cells - 2);
+      a[u] = f - i0[u];
+    }
+  };
+  taps(cam_.width(), rays_lo_x_.cols, col_i0_, col_a_);
+  taps(cam_.height(), rays_lo_x_.rows, row_j0_, row_b_);
   bg_.create(cam_.height(), cam_.width(), CV_8UC3);
   depth_.create(cam_.height(), cam_.width(), CV_32F);
   t_lo_.create(rays_lo_x_.size(), CV_32F);
@@ -103,9 +186,10 @@ SceneRenderer::SceneRenderer(const CameraModel& camera, const TissueSurface& sur
 
 void SceneRenderer::setBoxes(const std::vector<std::array<Eigen::Vector3d, 8>>& boxes_world)
 {
-  boxes_.clear();
+  std::vector<Box> boxes;
   for (const auto& v : boxes_world)
-    boxes_.push_back(boxFromVertices(v));
+    boxes.push_back(boxFromVertices(v));  // may throw: the scene is then unchanged
+  boxes_.swap(boxes);
   cache_valid_ = false;
 }
 
@@ -153,7 +237,6 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
   const float pad = static_cast<float>(tex_pad_);
   const float L = static_cast<float>(opt_.light_distance);
   const float* hm = hmap_.ptr<float>();
-  const cv::Vec3f* nm = nmap_.ptr<cv::Vec3f>();
   row_kz_.resize(w);
   row_bx_.resize(w);
   row_by_.resize(w);
@@ -178,13 +261,44 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
       for (int i = 0; i < count; ++i)
         ts[i] = (sampleClamp(hm, n, ax + ts[i] * bxs[i], ay + ts[i] * bys[i]) - o.z()) * (kzs[i] != 0.f ? kzs[i] : -1.f);
   };
+  // Newton steps on f(t) = o_z + t d_z - h(o + t d) from a close start (the upsampled coarse
+  // solution): f'(t) = d_z - grad h . d_xy comes from the same four taps as h, and the error
+  // squares at every step instead of shrinking by |grad h . d_xy / d_z| (the fixed-point
+  // iteration's factor). Where the surface is nearly parallel to the ray (|f'| < |d_z| / 4) the
+  // step falls back to the fixed-point update.
+  row_gx_.resize(w);
+  row_gy_.resize(w);
+  float* gxs = row_gx_.data();
+  float* gys = row_gy_.data();
+  auto newtonRow = [&](int count, int iterations) {
+    for (int it = 0; it < iterations; ++it)
+      for (int i = 0; i < count; ++i)
+      {
+        const float kz = kzs[i];
+        float& gx = gxs[i];
+        float& gy = gys[i];
+        const float hv = sampleGradClamp(hm, n, ax + ts[i] * bxs[i], ay + ts[i] * bys[i], gx, gy);
+        if (kz == 0.f)
+        {
+          ts[i] = o.z() - hv;  // not pointing down: stays a miss
+          continue;
+        }
+        const float dz = 1.f / kz;
+        const float fp = dz - (gx * bxs[i] + gy * bys[i]);
+        const float f = o.z() + ts[i] * dz - hv;
+        ts[i] -= fp < 0.25f * dz ? f / fp : f * kz;
+      }
+  };
   const bool coarse = !rays_c_x_.empty();
   if (coarse)
   {
     // all iterations on a grid twice coarser, upsampled to the tissue grid as the start
     for (int j = 0; j < rays_c_x_.rows; ++j)
     {
-      solveRow(rays_c_x_.ptr<float>(j), rays_c_y_.ptr<float>(j), rays_c_x_.cols, nullptr, opt_.tissue_iterations);
+      // fixed-point iterations from the mean plane (robust), the last two as Newton steps
+      const int newton = std::min(2, opt_.tissue_iterations - 1);
+      solveRow(rays_c_x_.ptr<float>(j), rays_c_y_.ptr<float>(j), rays_c_x_.cols, nullptr, opt_.tissue_iterations - newton);
+      newtonRow(rays_c_x_.cols, newton);
       std::copy(ts, ts + rays_c_x_.cols, t_c_.ptr<float>(j));
     }
     cv::resize(t_c_, t_init_, t_lo_.size(), 0, 0, cv::INTER_LINEAR);
@@ -196,7 +310,13 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
     float* tt = t_lo_.ptr<float>(j);
     cv::Vec2f* mp = maps_lo_.ptr<cv::Vec2f>(j);
     float* sh = shade_lo_.ptr<float>(j);
-    solveRow(rx, ry, w, coarse ? t_init_.ptr<float>(j) : nullptr, coarse ? opt_.refine_iterations : opt_.tissue_iterations);
+    if (coarse)
+    {
+      solveRow(rx, ry, w, t_init_.ptr<float>(j), 0);
+      newtonRow(w, opt_.refine_iterations);
+    }
+    else
+      solveRow(rx, ry, w, nullptr, opt_.tissue_iterations);
     for (int i = 0; i < w; ++i)
     {
       const float t = ts[i];
@@ -210,9 +330,21 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
       }
       tt[i] = t;
       const Eigen::Vector3f d = R * Eigen::Vector3f(rx[i], ry[i], 1.f);
-      const Eigen::Vector3f nrm = sampleClamp3(nm, n, mx, my);
+      // unit normal (-dz/dx, -dz/dy, 1) / norm of the interpolated height field; after Newton
+      // steps, the gradient of the last one (evaluated a Newton correction, << 1 texel, before the
+      // solution: the same bilinear patch, i.e. the same gradient up to ~1e-3 of its variation)
+      float gx, gy;
+      if (coarse && opt_.refine_iterations > 0)
+      {
+        gx = gxs[i];
+        gy = gys[i];
+      }
+      else
+        gradientClamp(hm, n, mx, my, gx, gy);
+      gx *= inv_res;
+      gy *= inv_res;
       const float dn = d.norm();
-      const float lam = std::min(std::max(-nrm.dot(d) / dn, 0.f), 1.f);
+      const float lam = std::min(std::max((gx * d.x() + gy * d.y() - d.z()) / (dn * std::sqrt(1.f + gx * gx + gy * gy)), 0.f), 1.f);
       const float x = L / std::max(t * dn, 1e-3f);
       const float fall = std::min(std::max(x * std::sqrt(x), 0.3f), 1.3f);  // (L / distance)^1.5
       sh[i] = (0.15f + 0.85f * lam) * fall * 128.f;
@@ -224,12 +356,8 @@ inline float SceneRenderer::tissueDepthAt(int u, int v) const
 {
   // the full-resolution tissue depth of cv::resize(INTER_LINEAR) of the tissue grid at pixel
   // (u, v), inf where an interpolation tap misses the tissue
-  const int h = t_lo_.rows, w = t_lo_.cols;
-  const float inv = 1.f / tissue_step_;
-  const float fy = std::min(std::max((v + 0.5f) * inv - 0.5f, 0.f), float(h - 1));
-  const float fx = std::min(std::max((u + 0.5f) * inv - 0.5f, 0.f), float(w - 1));
-  const int j0 = std::min(int(fy), h - 2), i0 = std::min(int(fx), w - 2);
-  const float a = fx - i0, b = fy - j0;
+  const int i0 = col_i0_[u], j0 = row_j0_[v];
+  const float a = col_a_[u], b = row_b_[v];
   const float* r0 = t_lo_.ptr<float>(j0) + i0;
   const float* r1 = t_lo_.ptr<float>(j0 + 1) + i0;
   const float d = (1 - b) * ((1 - a) * r0[0] + a * r0[1]) + b * ((1 - a) * r1[0] + a * r1[1]);
@@ -290,44 +418,139 @@ bool SceneRenderer::roi(const Eigen::Isometry3d& T_cam_world, const std::vector<
   return true;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Image region of a box (conservative): the box clipped to z >= near is convex, so its central
+// projection onto the normalised plane (x/z, y/z) is the convex hull of the projected vertices
+// of the clipped box (corners in front + edge/near-plane intersections). That polygon is clipped
+// to the rectangle of the image's pixel rays (where the distortion model is used by the
+// calibration), its edges are sampled every <= 16 px through the distortion model and the convex
+// hull of the samples (+ 2 px margin in the row spans) bounds the pixels whose ray can hit the box.
+bool SceneRenderer::boxSilhouette(const Eigen::Isometry3d& T_cam_world, const std::array<Eigen::Vector3d, 8>& corners,
+                                  Silhouette& sil)
+{
+  static const int edges[12][2] = { { 0, 1 }, { 2, 3 }, { 4, 5 }, { 6, 7 }, { 0, 2 }, { 1, 3 },
+                                    { 4, 6 }, { 5, 7 }, { 0, 4 }, { 1, 5 }, { 2, 6 }, { 3, 7 } };
+  const double near = 1e-3;
+  Eigen::Vector3d pc[8];
+  sil.zmin = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < 8; ++k)
+  {
+    pc[k] = T_cam_world * corners[k];
+    sil.zmin = std::min(sil.zmin, static_cast<float>(pc[k].z()));
+  }
+  poly_.clear();
+  for (int k = 0; k < 8; ++k)
+    if (pc[k].z() >= near)
+      poly_.emplace_back(pc[k].x() / pc[k].z(), pc[k].y() / pc[k].z());
+  for (const auto& e : edges)
+  {
+    const Eigen::Vector3d &a = pc[e[0]], &b = pc[e[1]];
+    if ((a.z() < near) != (b.z() < near))
+    {
+      const Eigen::Vector3d p = a + (near - a.z()) / (b.z() - a.z()) * (b - a);
+      poly_.emplace_back(p.x() / near, p.y() / near);
+    }
+  }
+  if (poly_.empty())
+    return false;
+  convexHull2d(poly_, clip_a_);
+  // Sutherland-Hodgman against the ray rectangle (4 axis-aligned half-planes)
+  for (int side = 0; side < 4 && !clip_a_.empty(); ++side)
+  {
+    const int axis = side / 2;
+    const double lim = side % 2 ? ray_hi_[axis] : ray_lo_[axis];
+    auto inside = [&](const cv::Point2d& p) { return side % 2 ? (axis ? p.y : p.x) <= lim : (axis ? p.y : p.x) >= lim; };
+    clip_b_.clear();
+    const size_t n = clip_a_.size();
+    for (size_t i = 0; i < n; ++i)
+    {
+      const cv::Point2d& p = clip_a_[i];
+      const cv::Point2d& q = clip_a_[(i + 1) % n];
+      const bool ip = inside(p), iq = inside(q);
+      if (ip)
+        clip_b_.push_back(p);
+      if (ip != iq)
+      {
+        const double pv = axis ? p.y : p.x, qv = axis ? q.y : q.x;
+        clip_b_.push_back(p + (lim - pv) / (qv - pv) * (q - p));
+      }
+    }
+    clip_a_.swap(clip_b_);
+  }
+  if (clip_a_.empty())
+    return false;
+  // polygon edges through the distortion model
+  hull_pts_.clear();
+  const size_t n = clip_a_.size();
+  for (size_t i = 0; i < n; ++i)
+  {
+    const Eigen::Vector2d p(clip_a_[i].x, clip_a_[i].y), q(clip_a_[(i + 1) % n].x, clip_a_[(i + 1) % n].y);
+    const double len = (cam_.distort(q) - cam_.distort(p)).norm();
+    const int steps = std::min(std::max(static_cast<int>(std::ceil(len / 16.0)), 1), 256);
+    for (int k = 0; k < steps; ++k)
+    {
+      const Eigen::Vector2d uv = cam_.distort(p + (double(k) / steps) * (q - p));
+      if (!uv.allFinite())
+        return false;
+      hull_pts_.emplace_back(float(uv.x()), float(uv.y()));
+    }
+  }
+  cv::convexHull(hull_pts_, sil.hull);
+  float bx0 = 1e30f, by0 = 1e30f, bx1 = -1e30f, by1 = -1e30f;
+  for (const cv::Point2f& p : sil.hull)
+  {
+    bx0 = std::min(bx0, p.x);
+    by0 = std::min(by0, p.y);
+    bx1 = std::max(bx1, p.x);
+    by1 = std::max(by1, p.y);
+  }
+  const int x0 = std::max(int(std::floor(bx0)) - 3, 0), y0 = std::max(int(std::floor(by0)) - 3, 0);
+  const int x1 = std::min(int(std::ceil(bx1)) + 4, cam_.width());
+  const int y1 = std::min(int(std::ceil(by1)) + 4, cam_.height());
+  if (x0 >= x1 || y0 >= y1)
+    return false;
+  sil.rect = cv::Rect(x0, y0, x1 - x0, y1 - y0);
+  return true;
+}
+
 void SceneRenderer::renderBackground(const Eigen::Isometry3d& T_world_cam)
 {
   const Eigen::Matrix3f R = T_world_cam.linear().cast<float>();
   const Eigen::Vector3f o = T_world_cam.translation().cast<float>();
+  Clock::time_point t0 = Clock::now();
   solveTissue(R, o);
+  stats_.tissue_ms += lap(t0);
   // colour layer: texture coordinates + shade upsampled to the colour grid, texture sampled
   // there, shaded (shade rounded to uint8 x 1/128, as the Python reference), upsampled to the image
   cv::resize(maps_lo_, maps_c_, colour_size_, 0, 0, cv::INTER_LINEAR);
   cv::resize(shade_lo_, shade_c_, colour_size_, 0, 0, cv::INTER_LINEAR);
   cv::remap(tex_padded_, col_c_, maps_c_, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
-  for (int j = 0; j < col_c_.rows; ++j)
-  {
-    cv::Vec3b* c = col_c_.ptr<cv::Vec3b>(j);
-    const float* s = shade_c_.ptr<float>(j);
-    for (int i = 0; i < col_c_.cols; ++i)
-    {
-      const float k = static_cast<float>(cv::saturate_cast<uchar>(s[i])) * (1.f / 128.f);
-      for (int ch = 0; ch < 3; ++ch)
-        c[i][ch] = cv::saturate_cast<uchar>(c[i][ch] * k);
-    }
-  }
+  // colour x saturate_cast<uchar>(shade) / 128, rounded (OpenCV's vectorised kernels)
+  shade_c_.convertTo(shade_u8_, CV_8U);
+  cv::cvtColor(shade_u8_, shade_u8c3_, cv::COLOR_GRAY2BGR);
+  cv::multiply(col_c_, shade_u8c3_, col_c_, 1.0 / 128.0);
   if (col_c_.size() == bg_.size())
     col_c_.copyTo(bg_);
   else
     cv::resize(col_c_, bg_, bg_.size(), 0, 0, cv::INTER_LINEAR);
+  stats_.colour_ms += lap(t0);
   if (boxes_.empty() && !target_)
     return;
   // rectangles that need a full-resolution depth: the bones' and the target's
   const Eigen::Isometry3d Tcw = T_world_cam.inverse();
+  const Eigen::Vector3d od = T_world_cam.translation();
   cv::Rect all;
   std::vector<Eigen::Vector3d> pts;
-  for (const Box& b : boxes_)
+  box_sil_.resize(boxes_.size());
+  for (size_t k = 0; k < boxes_.size(); ++k)
   {
-    const auto c = b.corners();
-    pts.assign(c.begin(), c.end());
-    cv::Rect r;
-    if (roi(Tcw, pts, r))
-      all = all.area() ? (all | r) : r;
+    const Box& b = boxes_[k];
+    Silhouette& sil = box_sil_[k];
+    // camera inside the box: no face is visible from outside (as the reference)
+    const Eigen::Vector3d ob = b.axes * (od - b.centre);
+    sil.visible = (ob.cwiseAbs() - b.half).maxCoeff() > 0.0 && boxSilhouette(Tcw, b.corners(), sil);
+    if (sil.visible)
+      all = all.area() ? (all | sil.rect) : sil.rect;
   }
   cv::Rect target_rect;
   if (target_)
@@ -346,8 +569,10 @@ void SceneRenderer::renderBackground(const Eigen::Isometry3d& T_world_cam)
   depth_(all).setTo(kInf);
   if (!boxes_.empty())
     renderBoxes(T_world_cam, all);
+  stats_.boxes_ms += lap(t0);
   if (target_rect.area() > 0)
     renderTarget(T_world_cam, target_rect);
+  stats_.target_ms += lap(t0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -366,23 +591,17 @@ struct SceneRenderer::BoxCam
 void SceneRenderer::renderBoxes(const Eigen::Isometry3d& T_world_cam, const cv::Rect& depth_rect)
 {
   const Eigen::Isometry3d Tcw = T_world_cam.inverse();
-  const Eigen::Vector3d o = T_world_cam.translation();
   const double L = opt_.light_distance;
   box_tn_.resize(cam_.width());
   box_face_.resize(cam_.width());
-  std::vector<Eigen::Vector3d> pts;
-  for (const Box& b : boxes_)
+  for (size_t k = 0; k < boxes_.size(); ++k)
   {
-    // camera inside the box: no face is visible from outside (as the reference)
-    const Eigen::Vector3d ob = b.axes * (o - b.centre);
-    if ((ob.cwiseAbs() - b.half).maxCoeff() <= 0.0)
+    const Box& b = boxes_[k];
+    const Silhouette& sil = box_sil_[k];
+    if (!sil.visible)
       continue;
     BoxCam bc;
-    const auto c = b.corners();
-    pts.assign(c.begin(), c.end());
-    if (!roi(Tcw, pts, bc.rect))
-      continue;
-    bc.rect &= depth_rect;
+    bc.rect = sil.rect & depth_rect;
     const Eigen::Vector3d cc = Tcw * b.centre;
     for (int i = 0; i < 3; ++i)
     {
@@ -404,41 +623,17 @@ void SceneRenderer::renderBoxes(const Eigen::Isometry3d& T_world_cam, const cv::
       }
     }
     const float near = 1e-3f;
-    // per-row pixel spans of the box's silhouette: convex hull of its edges projected through the
-    // distortion model (9 samples per edge), 2 px margin; the bounding rectangle if the box is not
-    // entirely in front of the camera and inside 1.5 x the field of view
-    bool hull_ok = true;
-    hull_pts_.clear();
-    static const int edges[12][2] = { { 0, 1 }, { 2, 3 }, { 4, 5 }, { 6, 7 }, { 0, 2 }, { 1, 3 },
-                                      { 4, 6 }, { 5, 7 }, { 0, 4 }, { 1, 5 }, { 2, 6 }, { 3, 7 } };
-    for (const auto& e : edges)
-    {
-      const Eigen::Vector3d a = Tcw * c[e[0]], b2 = Tcw * c[e[1]];
-      for (int k = 0; k < 9 && hull_ok; ++k)
-      {
-        const Eigen::Vector3d p = a + (k / 8.0) * (b2 - a);
-        if (p.z() < 1e-3 || std::abs(p.x() / p.z()) > 1.5 * fov_.x() || std::abs(p.y() / p.z()) > 1.5 * fov_.y())
-        {
-          hull_ok = false;
-          break;
-        }
-        const Eigen::Vector2d uv = cam_.project(p);
-        hull_pts_.emplace_back(float(uv.x()), float(uv.y()));
-      }
-    }
-    if (hull_ok)
-      cv::convexHull(hull_pts_, hull_);
+    const std::vector<cv::Point2f>& hull = sil.hull;
     for (int v = bc.rect.y; v < bc.rect.y + bc.rect.height; ++v)
     {
       int u0 = bc.rect.x, u1 = bc.rect.x + bc.rect.width;
-      if (hull_ok)
       {
         float lo = 1e30f, hi = -1e30f;
-        const size_t nh = hull_.size();
-        for (size_t k = 0; k < nh; ++k)
+        const size_t nh = hull.size();
+        for (size_t e = 0; e < nh; ++e)
         {
-          const cv::Point2f& p = hull_[k];
-          const cv::Point2f& q = hull_[(k + 1) % nh];
+          const cv::Point2f& p = hull[e];
+          const cv::Point2f& q = hull[(e + 1) % nh];
           // the row band [v - 2, v + 2] against edge p-q: x range of the edge within the band
           const float ya = std::max(std::min(p.y, q.y), v - 2.f), yb = std::min(std::max(p.y, q.y), v + 2.f);
           if (ya > yb)
@@ -458,6 +653,19 @@ void SceneRenderer::renderBoxes(const Eigen::Isometry3d& T_world_cam, const cv::
           continue;
         u0 = std::max(u0, int(std::floor(lo)) - 2);
         u1 = std::min(u1, int(std::ceil(hi)) + 3);
+      }
+      if (u0 >= u1)
+        continue;
+      // the whole span behind the tissue (every interpolation tap of the tissue depth nearer
+      // than the box's nearest corner): nothing of this box is visible in the row
+      {
+        const float* t0 = t_lo_.ptr<float>(row_j0_[v]);
+        const float* t1 = t_lo_.ptr<float>(row_j0_[v] + 1);
+        float tmax = 0.f;
+        for (int i = col_i0_[u0], ie = col_i0_[u1 - 1] + 1; i <= ie; ++i)
+          tmax = std::max(tmax, std::max(t0[i], t1[i]));
+        if (sil.zmin > tmax)
+          continue;
       }
       const float* rx = rays_x_.ptr<float>(v);
       const float* ry = rays_y_.ptr<float>(v);
@@ -543,7 +751,9 @@ void SceneRenderer::renderTarget(const Eigen::Isometry3d& T_world_cam, const cv:
 void SceneRenderer::render(const Eigen::Isometry3d& T_world_cam, const std::vector<Shaft>& shafts, cv::Mat& out)
 {
   const cv::Mat& bg = background(T_world_cam);
+  Clock::time_point t0 = Clock::now();
   bg.copyTo(out);
+  stats_.copy_ms += lap(t0);
   if (shafts.empty())
     return;
   const Eigen::Isometry3d Tcw = T_world_cam.inverse();
@@ -576,6 +786,7 @@ void SceneRenderer::render(const Eigen::Isometry3d& T_world_cam, const std::vect
   std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.zmin > b.zmin; });
   for (const Item& it : items)
     drawShaft(out, it.pc, it.above, it.radius);
+  stats_.shafts_ms += lap(t0);
 }
 
 void SceneRenderer::drawShaft(cv::Mat& img, const std::vector<Eigen::Vector3d>& pc, const std::vector<bool>& above,

@@ -11,9 +11,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <Eigen/SVD>
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
+#include <saras_collision/geometry.h>
+#include <saras_collision/vertices_file.h>
 
 namespace saras_drivers
 {
@@ -126,95 +127,29 @@ std::array<Eigen::Vector3d, 8> Box::corners() const
 
 std::vector<std::array<Eigen::Vector3d, 8>> loadBoxes(const std::string& path, double scaling)
 {
-  std::ifstream f(path);
-  if (!f)
-    throw std::invalid_argument(path + ": cannot open vertices file");
-  std::vector<std::string> tokens;
-  std::string line;
-  while (std::getline(f, line))
-  {
-    const size_t hash = line.find('#');
-    std::istringstream ls(line.substr(0, hash));
-    std::string t;
-    while (ls >> t)
-      tokens.push_back(t);
-  }
-  if (tokens.empty())
-    throw std::invalid_argument(path + ": empty vertices file");
-  auto number = [&](const std::string& t) {
-    size_t used = 0;
-    double v = 0;
-    try
-    {
-      v = std::stod(t, &used);
-    }
-    catch (const std::exception&)
-    {
-      used = 0;
-    }
-    if (used != t.size())
-      throw std::invalid_argument(path + ": not numeric: '" + t + "'");
-    return v;
-  };
-  const double numd = number(tokens[0]);
-  if (numd != std::floor(numd))
-    throw std::invalid_argument(path + ": not numeric: box count '" + tokens[0] + "' is not an integer");
-  const long num = static_cast<long>(numd);
-  std::vector<double> vals;
-  for (size_t i = 1; i < tokens.size(); ++i)
-    vals.push_back(number(tokens[i]) * scaling);
-  bool finite = std::all_of(vals.begin(), vals.end(), [](double v) { return std::isfinite(v); });
-  if (num < 0 || static_cast<long>(vals.size()) != num * 24 || !finite)
-    throw std::invalid_argument(path + ": expected " + std::to_string(num) +
-                                " boxes x 8 vertices x 3 finite numbers, got " + std::to_string(vals.size()) +
-                                " numbers" + (finite ? "" : " (not all finite)"));
-  std::vector<std::array<Eigen::Vector3d, 8>> boxes(static_cast<size_t>(num));
-  for (long b = 0; b < num; ++b)
-    for (int k = 0; k < 8; ++k)
-      boxes[b][k] = Eigen::Vector3d(vals[24 * b + 3 * k], vals[24 * b + 3 * k + 1], vals[24 * b + 3 * k + 2]);
-  return boxes;
+  // the forbidden-region file's own parser (one definition of the format, D7.2 Section 6.1)
+  std::vector<saras_collision::OrientedBox> boxes;
+  std::string error;
+  if (!saras_collision::loadVerticesFile(path, scaling, saras_collision::kBoxRelativeTolerance, boxes, error))
+    throw std::invalid_argument(error);
+  std::vector<std::array<Eigen::Vector3d, 8>> out(boxes.size());
+  for (size_t b = 0; b < boxes.size(); ++b)
+    saras_collision::boxVertices(boxes[b], out[b].data());
+  return out;
 }
 
 Box boxFromVertices(const std::array<Eigen::Vector3d, 8>& v)
 {
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (const auto& p : v)
-    c += p / 8.0;
-  std::array<int, 7> idx;
-  std::iota(idx.begin(), idx.end(), 1);
-  std::stable_sort(idx.begin(), idx.end(),
-                   [&](int a, int b) { return (v[a] - v[0]).norm() < (v[b] - v[0]).norm(); });
+  saras_collision::OrientedBox ob;
+  const int code = saras_collision::makeBox(v.data(), saras_collision::kBoxRelativeTolerance, ob);
+  if (code != saras_collision::kSeparated)
+    throw std::invalid_argument(std::string("box vertices are not a rectangular box in the order v0, v0+x, v0+x+z, "
+                                            "v0+z, v0+y, v0+x+y, v0+x+y+z, v0+y+z (") +
+                                saras_collision::codeName(code) + ")");
   Box box;
-  bool ok = true;
-  Eigen::Vector3d n;
-  for (int i = 0; i < 3; ++i)
-  {
-    const Eigen::Vector3d e = v[idx[i]] - v[0];
-    n[i] = e.norm();
-    ok = ok && n[i] > 1e-9;
-    box.axes.row(i) = (e / std::max(n[i], 1e-12)).transpose();
-  }
-  if (ok && ((box.axes * box.axes.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-3))
-  {
-    box.centre = c;
-    box.half = n / 2.0;
-    return box;
-  }
-  Eigen::Matrix<double, 8, 3> m;
-  for (int k = 0; k < 8; ++k)
-    m.row(k) = (v[k] - c).transpose();
-  Eigen::JacobiSVD<Eigen::Matrix<double, 8, 3>> svd(m, Eigen::ComputeFullV);
-  const Eigen::Matrix3d vt = svd.matrixV().transpose();
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  for (int k = 0; k < 8; ++k)
-  {
-    const Eigen::Vector3d p = vt * m.row(k).transpose();
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  box.centre = c + vt.transpose() * ((lo + hi) / 2.0);
-  box.axes = vt;
-  box.half = (hi - lo) / 2.0;
+  box.centre = ob.center;
+  box.axes = ob.axes.transpose();  // rows: unit axes
+  box.half = ob.half;
   return box;
 }
 

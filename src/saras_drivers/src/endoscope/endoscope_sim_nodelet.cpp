@@ -16,8 +16,11 @@
  * Image stamp = TF time of the rendered camera pose (now when the pose is static), so
  * lookupTransform(world, optical, image.header.stamp) returns exactly the rendered pose.
  * Lazy: an eye is rendered only if its image_raw or compressed topic has subscribers, JPEG
- * encoded only if compressed has subscribers. The eyes are rendered in parallel (the timer thread
- * renders the left one, a persistent worker thread the right one; ~parallel_eyes).
+ * encoded only if compressed has subscribers. With ~parallel_eyes each eye has a persistent
+ * thread that renders, encodes and publishes it; the timer thread only looks up TF and hands the
+ * frame out, and skips a tick (never queues) while the previous frame is not published yet.
+ * Outgoing image messages come from per-eye pools (endoscope_message_pool.h): no per-frame
+ * allocation or zero-filling of the 2.7 MB (720p) image.
  *
  * Parameters (private; units): fps [Hz] 30 in [0.5, 120]; width, height [px] 1280 x 720;
  * camera_info_dir; left_camera_info, right_camera_info (file names, absolute or in the dir);
@@ -60,6 +63,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "saras_drivers/endoscope_message_pool.h"
 #include "saras_drivers/endoscope_renderer.h"
 #include "saras_drivers/nodelet_namespace.h"
 
@@ -272,6 +276,7 @@ public:
     jpeg_quality_ = paramInt(pnh, "jpeg_quality", 85);
     if (jpeg_quality_ < 0 || jpeg_quality_ > 100)
       fail("parameter ~jpeg_quality must be in [0, 100]");
+    jpeg_params_ = { cv::IMWRITE_JPEG_QUALITY, jpeg_quality_ };
     tf_timeout_ = paramDouble(pnh, "tf_timeout", 0.5);
     parallel_ = paramBool(pnh, "parallel_eyes", true);
     TissueSurface surface = tissueFromParam();
@@ -333,7 +338,8 @@ public:
       // parallel over the eyes, not inside each OpenCV call (as the Python node); note that this
       // is process-wide (the other nodelets of a shared manager run OpenCV single-threaded too)
       cv::setNumThreads(1);
-      worker_ = std::thread(&EndoscopeSim::workerLoop, this);
+      for (int e = 0; e < 2; ++e)
+        workers_[e] = std::thread(&EndoscopeSim::workerLoop, this, e);
     }
     timer_ = nh.createTimer(ros::Duration(1.0 / fps_), &EndoscopeSim::tick, this);
   }
@@ -346,8 +352,9 @@ public:
       quit_ = true;
     }
     work_cv_.notify_all();
-    if (worker_.joinable())
-      worker_.join();
+    for (auto& w : workers_)
+      if (w.joinable())
+        w.join();
   }
 
 private:
@@ -357,10 +364,11 @@ private:
     int width = 0, height = 0;
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     bool want_raw = false, want_jpg = false;
-    sensor_msgs::ImagePtr img;     ///< fresh per frame (subscribers of a nodelet may keep it)
-    cv::Mat buffer;                ///< render target when only the JPEG is wanted
-    std::vector<uchar> jpeg;       ///< encoder output (capacity reused)
-    bool jpeg_ok = false;
+    sensor_msgs::ImagePtr img;             ///< this frame's image_raw (from img_pool)
+    sensor_msgs::CompressedImagePtr jpg;   ///< this frame's compressed image (from jpg_pool)
+    MessagePool<sensor_msgs::Image> img_pool;  ///< reused once no subscriber holds them
+    MessagePool<sensor_msgs::CompressedImage> jpg_pool;
+    cv::Mat buffer;                        ///< render target when only the JPEG is wanted
   };
 
   TissueSurface tissueFromParam()
@@ -541,8 +549,16 @@ private:
     for (auto& b : world)
       for (auto& v : b)
         v = T * v;
-    for (auto& r : renderers_)
-      r->setBoxes(world);
+    try
+    {
+      for (auto& r : renderers_)
+        r->setBoxes(world);
+    }
+    catch (const std::invalid_argument& e)  // not expected: a rigid transform keeps the boxes rectangular
+    {
+      ROS_ERROR_THROTTLE(2.0, "%s: bone boxes not drawn: %s", name_.c_str(), e.what());
+      return;
+    }
     bones_placed_ = true;
   }
 
@@ -550,7 +566,20 @@ private:
   {
     std::unique_lock<std::mutex> busy(tick_mutex_, std::try_to_lock);
     if (!busy.owns_lock())
-      return;  // previous frame still running: skip, never queue
+      return;  // previous tick still running: skip, never queue
+    if (parallel_)
+    {
+      // the eye threads still render / publish the previous frame: skip this one (never queue);
+      // nothing they read (poses, shafts, renderers' scene) may change before they are done
+      std::lock_guard<std::mutex> lock(work_mutex_);
+      if (pending_[0] || pending_[1])
+      {
+        ++frames_skipped_;
+        ROS_DEBUG_THROTTLE(5.0, "%s: frame skipped, the previous one is still being rendered (%lu skipped)",
+                           name_.c_str(), frames_skipped_);
+        return;
+      }
+    }
     const ros::Time now = ros::Time::now();
     {
       std::string kind;
@@ -625,24 +654,23 @@ private:
       eye_[e].want_raw = pub_img_[e].getNumSubscribers() > 0;
       eye_[e].want_jpg = pub_jpg_[e].getNumSubscribers() > 0;
     }
-    if (parallel_ && (eye_[1].want_raw || eye_[1].want_jpg))
+    stamp_ = stamp;
+    if (parallel_)
     {
+      // each eye thread renders, encodes and publishes its eye; the timer thread returns at
+      // once (the frame's work may take up to a whole period on each core)
       {
         std::lock_guard<std::mutex> lock(work_mutex_);
-        work_pending_ = true;
+        pending_[0] = pending_[1] = true;
       }
-      work_cv_.notify_one();
-      renderEye(0);
-      std::unique_lock<std::mutex> lock(work_mutex_);
-      work_cv_.wait(lock, [this] { return !work_pending_; });
+      work_cv_.notify_all();
     }
     else
-    {
-      renderEye(0);
-      renderEye(1);
-    }
-    for (int e = 0; e < 2; ++e)
-      publish(e, stamp);
+      for (int e = 0; e < 2; ++e)
+      {
+        renderEye(e);
+        publish(e, stamp_);
+      }
     ++hb_.received;
     hb_.last_input = now.toSec();
     const double age = (now - stamp).toSec();
@@ -658,19 +686,20 @@ private:
     status(now);
   }
 
-  void workerLoop()
+  /// Eye thread @p e: renders, encodes and publishes its eye for every frame the tick hands out.
+  void workerLoop(int e)
   {
     std::unique_lock<std::mutex> lock(work_mutex_);
     while (true)
     {
-      work_cv_.wait(lock, [this] { return work_pending_ || quit_; });
+      work_cv_.wait(lock, [this, e] { return pending_[e] || quit_; });
       if (quit_)
         return;
       lock.unlock();
-      renderEye(1);
+      renderEye(e);
+      publish(e, stamp_);
       lock.lock();
-      work_pending_ = false;
-      work_cv_.notify_all();
+      pending_[e] = false;
     }
   }
 
@@ -679,7 +708,7 @@ private:
   {
     Eye& eye = eye_[e];
     eye.img.reset();
-    eye.jpeg_ok = false;
+    eye.jpg.reset();
     if (!eye.want_raw && !eye.want_jpg)
       return;
     try
@@ -688,7 +717,9 @@ private:
       cv::Mat wrap;
       if (eye.want_raw)
       {
-        eye.img = boost::make_shared<sensor_msgs::Image>();
+        // a pooled message: its 2.7 MB (720p) buffer is rendered over, never allocated or
+        // zero-filled per frame
+        eye.img = eye.img_pool.acquire();
         eye.img->height = eye.height;
         eye.img->width = eye.width;
         eye.img->encoding = "bgr8";
@@ -700,12 +731,21 @@ private:
       }
       renderers_[e]->render(eye.pose, shafts_, *target);
       if (eye.want_jpg)
-        eye.jpeg_ok = cv::imencode(".jpg", *target, eye.jpeg, { cv::IMWRITE_JPEG_QUALITY, jpeg_quality_ });
+      {
+        eye.jpg = eye.jpg_pool.acquire();
+        eye.jpg->format = "bgr8; jpeg compressed bgr8";
+        // encoded straight into the message (its capacity is reused)
+        if (!cv::imencode(".jpg", *target, eye.jpg->data, jpeg_params_))
+        {
+          eye.jpg.reset();
+          ROS_ERROR_THROTTLE(2.0, "%s: %s eye: JPEG encoding failed", name_.c_str(), kEyes[e]);
+        }
+      }
     }
     catch (const std::exception& ex)
     {
       eye.img.reset();
-      eye.jpeg_ok = false;
+      eye.jpg.reset();
       ROS_ERROR_THROTTLE(2.0, "%s: %s eye not rendered: %s", name_.c_str(), kEyes[e], ex.what());
     }
   }
@@ -718,16 +758,14 @@ private:
       eye.img->header.stamp = stamp;
       eye.img->header.frame_id = frames_[e];
       pub_img_[e].publish(eye.img);
-      eye.img.reset();
+      eye.img.reset();  // the pool's reference (+ intra-process subscribers') only
     }
-    if (eye.jpeg_ok)
+    if (eye.jpg)
     {
-      auto c = boost::make_shared<sensor_msgs::CompressedImage>();
-      c->header.stamp = stamp;
-      c->header.frame_id = frames_[e];
-      c->format = "bgr8; jpeg compressed bgr8";
-      c->data.assign(eye.jpeg.begin(), eye.jpeg.end());
-      pub_jpg_[e].publish(c);
+      eye.jpg->header.stamp = stamp;
+      eye.jpg->header.frame_id = frames_[e];
+      pub_jpg_[e].publish(eye.jpg);
+      eye.jpg.reset();
     }
     info_[e].header.stamp = stamp;
     pub_info_[e].publish(info_[e]);
@@ -758,6 +796,7 @@ private:
   std::string name_;
   double fps_ = 30.0, tf_timeout_ = 0.5;
   int jpeg_quality_ = 85;
+  std::vector<int> jpeg_params_;  ///< cv::imencode parameters
   bool parallel_ = true;
   std::string world_, frames_[2], bones_frame_;
   sensor_msgs::CameraInfo info_[2];
@@ -779,10 +818,14 @@ private:
   std::vector<Shaft> shafts_;
   Eye eye_[2];
   // right-eye worker
+  // eye threads (~parallel_eyes)
   std::mutex tick_mutex_, work_mutex_;
   std::condition_variable work_cv_;
-  bool work_pending_ = false, quit_ = false;
-  std::thread worker_;
+  bool pending_[2] = { false, false };  ///< eye e has a frame to render and publish
+  bool quit_ = false;
+  ros::Time stamp_;                     ///< stamp of the frame being rendered
+  unsigned long frames_skipped_ = 0;    ///< ticks skipped because the previous frame was not done
+  std::thread workers_[2];
 };
 
 /// Nodelet `saras_drivers/EndoscopeSim` (nodelet_plugins.xml); executable endoscope_sim_node loads it.

@@ -5,6 +5,7 @@
  *        of the rendered image (checkerboard corners, ArUco marker corners, box silhouette,
  *        shaft tip) against independently projected 3D points.
  */
+#include <array>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -15,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "saras_drivers/endoscope_message_pool.h"
 #include "saras_drivers/endoscope_renderer.h"
 
 using namespace saras_drivers::endoscope;
@@ -48,6 +50,15 @@ Eigen::Isometry3d lookDown(double x, double y, double z, double tilt_x = 0.0, do
   T.linear() = rpyToMatrix(M_PI + tilt_x, tilt_y, yaw);
   T.translation() = Eigen::Vector3d(x, y, z);
   return T;
+}
+
+/// The 8 vertices of the axis-aligned box [lo, hi] in the vertices-file order (saras_collision):
+/// v0, v0+x, v0+x+z, v0+z, v0+y, v0+x+y, v0+x+y+z, v0+y+z.
+std::array<Eigen::Vector3d, 8> fileOrderBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi)
+{
+  const Eigen::Vector3d e = hi - lo;
+  const Eigen::Vector3d x(e.x(), 0, 0), y(0, e.y(), 0), z(0, 0, e.z());
+  return { lo, lo + x, lo + x + z, lo + z, lo + y, lo + x + y, lo + x + y + z, lo + y + z };
 }
 
 /// ENDOSCOPE_TEST_DUMP=dir: write the rendered images there (debugging).
@@ -162,13 +173,21 @@ TEST(Scene, VerticesFileValidation)
   Eigen::Vector3d h = b.half;
   std::sort(h.data(), h.data() + 3);
   EXPECT_NEAR((h - Eigen::Vector3d(0.005, 0.005, 0.01)).norm(), 0.0, 1e-12);
+  // the file is parsed by saras_collision::loadVerticesFile: its messages, prefixed with the path
   expectThrowWith([] { loadBoxes("/nonexistent/v.txt"); }, "/nonexistent/v.txt: cannot open");
-  expectThrowWith([] { loadBoxes(writeTemp("endo_empty.txt", "# nothing\n")); }, "empty vertices file");
-  expectThrowWith([] { loadBoxes(writeTemp("endo_word.txt", "1\n0 0 zero\n")); }, "not numeric: 'zero'");
+  expectThrowWith([] { loadBoxes(writeTemp("endo_empty.txt", "# nothing\n")); }, "empty file");
+  expectThrowWith([] { loadBoxes(writeTemp("endo_word.txt", "1\n0 0 zero\n")); }, "'zero' is not a finite number");
   expectThrowWith([] { loadBoxes(writeTemp("endo_count.txt", "2\n0 0 0\n1 0 0\n")); },
-                  "expected 2 boxes x 8 vertices x 3 finite numbers, got 6 numbers");
-  expectThrowWith([] { loadBoxes(writeTemp("endo_nan.txt", "1\n" + std::string(23, ' ') + "nan 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n")); },
-                  "not all finite");
+                  "unexpected end of file in box 0");
+  expectThrowWith([] { loadBoxes(writeTemp("endo_nan.txt", "1\nnan 0 0\n1 0 0\n1 0 1\n0 0 1\n0 2 0\n1 2 0\n1 2 1\n0 2 1\n")); },
+                  "'nan' is not a finite number");
+  // not a rectangular box (v6 moved): the contract of the vertices file, a clear load error
+  const std::string skew = writeTemp("endo_skew.txt", "1\n0 0 0\n1 0 0\n1 0 1\n0 0 1\n0 2 0\n1 2 0\n1.5 2 1\n0 2 1\n");
+  expectThrowWith([&] { loadBoxes(skew); }, skew + ": lines 2-9: box 0 is not a rectangular box");
+  // vertices out of the documented order are refused by the renderer's box model too
+  std::array<Eigen::Vector3d, 8> swapped = boxes[0];
+  std::swap(swapped[1], swapped[4]);
+  expectThrowWith([&] { boxFromVertices(swapped); }, "not a rectangular box in the order");
 }
 
 TEST(Scene, TargetsValidateTheirSizes)
@@ -266,11 +285,8 @@ TEST_F(RenderTruth, BoxSilhouetteAndShaftTipLandOnTheirProjection)
   SceneRenderer r(cam, TissueSurface());
   r.setUniformTexture(128);
   // one box on the tissue, axis-aligned top face at z = 0.09 (camera above at 0.17)
-  std::array<Eigen::Vector3d, 8> v;
   const Eigen::Vector3d lo(-0.02, -0.01, 0.06), hi(0.01, 0.012, 0.09);
-  for (int b = 0; b < 8; ++b)
-    v[b] = Eigen::Vector3d(b & 1 ? hi.x() : lo.x(), b & 2 ? hi.y() : lo.y(), b & 4 ? hi.z() : lo.z());
-  r.setBoxes({ v });
+  r.setBoxes({ fileOrderBox(lo, hi) });
   const Eigen::Isometry3d T = lookDown(0.0, 0.0, 0.17);  // top face seen head-on: its silhouette is the outline
   cv::Mat img, tissue_only;
   r.render(T, {}, img);
@@ -338,6 +354,121 @@ TEST_F(RenderTruth, BoxSilhouetteAndShaftTipLandOnTheirProjection)
       << "tip disc centre " << centre.x + roi.x << ", " << centre.y + roi.y << " projected tip " << tip;
 }
 
+/// Largest |z - height(x, y)| [m] of the tissue-grid points of @p r's last static layer
+/// (rays from cv::undistortPoints, independent of the renderer's ray tables) inside the
+/// textured square; @p hits, @p checked: rays that hit the tissue / were compared.
+double tissueHeightError(const CameraModel& cam, const SceneRenderer& r, const TissueSurface& surface,
+                         const Eigen::Isometry3d& T, int& hits, int& checked)
+{
+  const cv::Mat& t = r.tissueDepth();
+  const int step = r.tissueStep();
+  std::vector<cv::Point2d> px, xy;
+  for (int j = 0; j < t.rows; ++j)
+    for (int i = 0; i < t.cols; ++i)
+      px.emplace_back((i + 0.5) * step - 0.5, (j + 0.5) * step - 0.5);
+  cv::undistortPoints(px, xy, cam.cvK(), cam.cvD(), cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-14));
+  double worst = 0.0;
+  hits = checked = 0;
+  for (int j = 0; j < t.rows; ++j)
+    for (int i = 0; i < t.cols; ++i)
+    {
+      const float d = t.at<float>(j, i);
+      if (!std::isfinite(d))
+        continue;
+      ++hits;
+      const cv::Point2d& n = xy[size_t(j) * t.cols + i];
+      const Eigen::Vector3d p = T * (double(d) * Eigen::Vector3d(n.x, n.y, 1.0));
+      if (std::abs(p.x()) > 0.14 || std::abs(p.y()) > 0.14)
+        continue;  // outside the textured square (the height map is clamped there)
+      ++checked;
+      worst = std::max(worst, std::abs(p.z() - surface.height(p.x(), p.y())));
+    }
+  return worst;
+}
+
+TEST_F(RenderTruth, TissueDepthLiesOnTheAnalyticSurface)
+{
+  // every tissue-grid ray at its solved depth lies on the analytic height field (1 px at 10 cm
+  // is 0.11 mm; required: 0.01 mm)
+  const TissueSurface surface;
+  SceneRenderer r(cam, surface);
+  RendererOptions no_refine;  // the coarse solution alone, upsampled (sensitivity check)
+  no_refine.refine_iterations = 0;
+  SceneRenderer r_coarse(cam, surface, no_refine);
+  Eigen::Isometry3d oblique = Eigen::Isometry3d::Identity();  // ECM-like: 37 deg off vertical
+  oblique.linear() = rpyToMatrix(M_PI, -0.65, 0.0);
+  oblique.translation() = Eigen::Vector3d(0.083, 0.0, 0.170);
+  const Eigen::Isometry3d poses[3] = { lookDown(0.0, 0.0, 0.17), lookDown(0.01, -0.02, 0.12, 0.3, -0.25, 0.5), oblique };
+  double worst_coarse = 0.0;
+  for (const auto& T : poses)
+  {
+    cv::Mat img;
+    r.render(T, {}, img);
+    int hits = 0, checked = 0;
+    const double worst = tissueHeightError(cam, r, surface, T, hits, checked);
+    const int cells = r.tissueDepth().rows * r.tissueDepth().cols;
+    EXPECT_EQ(hits, cells);  // the tissue fills these views
+    EXPECT_GT(checked, cells / 4);
+    std::printf("tissue grid: %d rays checked, max height error %.2g mm\n", checked, worst * 1e3);
+    EXPECT_LT(worst, 1e-5) << "max height error " << worst * 1e3 << " mm";
+    r_coarse.render(T, {}, img);
+    worst_coarse = std::max(worst_coarse, tissueHeightError(cam, r_coarse, surface, T, hits, checked));
+  }
+  std::printf("without the Newton step: max height error %.2g mm\n", worst_coarse * 1e3);
+  EXPECT_GT(worst_coarse, 1e-5);  // the check can fail
+}
+
+TEST_F(RenderTruth, BoxPartlyBehindTheCameraAndBeyondTheViewIsExact)
+{
+  // a wall next to the camera reaching behind it (above the camera, which looks down) and far
+  // beyond the field of view, above the tissue: its pixels are exactly those whose ray (from
+  // cv::undistortPoints) hits it, by a brute-force double-precision slab test here
+  SceneRenderer r(cam, TissueSurface());
+  r.setUniformTexture(128);
+  SceneRenderer r0(cam, TissueSurface());
+  r0.setUniformTexture(128);
+  const Eigen::Vector3d lo(0.012, -0.5, 0.09), hi(0.5, 0.5, 0.30);
+  r.setBoxes({ fileOrderBox(lo, hi) });
+  const Eigen::Isometry3d T = lookDown(0.0, 0.0, 0.17, 0.0, 0.0, 0.2);
+  cv::Mat img, tissue_only;
+  r.render(T, {}, img);
+  r0.render(T, {}, tissue_only);
+  cv::Mat absdiff;
+  cv::absdiff(img, tissue_only, absdiff);
+  cv::cvtColor(absdiff, absdiff, cv::COLOR_BGR2GRAY);
+  const cv::Mat wall = absdiff > 4;
+  std::vector<cv::Point2d> px, xy;
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x)
+      px.emplace_back(x, y);
+  cv::undistortPoints(px, xy, cam.cvK(), cam.cvD(), cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-14));
+  const Eigen::Vector3d o = T.translation();
+  cv::Mat ref = cv::Mat::zeros(img.size(), CV_8U);
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x)
+    {
+      const cv::Point2d& n = xy[size_t(y) * img.cols + x];
+      const Eigen::Vector3d d = T.linear() * Eigen::Vector3d(n.x, n.y, 1.0);  // world, t = optical depth
+      double tn = -1e300, tf = 1e300;
+      for (int a = 0; a < 3; ++a)
+      {
+        const double p = (lo[a] - o[a]) / d[a], q = (hi[a] - o[a]) / d[a];
+        tn = std::max(tn, std::min(p, q));
+        tf = std::min(tf, std::max(p, q));
+      }
+      if (tn <= tf && tn >= 1e-3)
+        ref.at<uchar>(y, x) = 255;
+    }
+  cv::Mat diff;
+  cv::bitwise_xor(wall, ref, diff);
+  const int area = cv::countNonZero(ref), mismatch = cv::countNonZero(diff);
+  ASSERT_GT(area, 50000);
+  ASSERT_LT(area, img.rows * img.cols - 50000);
+  EXPECT_LT(mismatch, 0.002 * area) << "mismatch " << mismatch << " of " << area << " px";
+}
+
 TEST_F(RenderTruth, StaticLayerIsCachedPerPose)
 {
   SceneRenderer r(cam, TissueSurface());
@@ -355,6 +486,46 @@ TEST_F(RenderTruth, StaticLayerIsCachedPerPose)
   cv::Scalar mean = cv::mean(a);
   EXPECT_GT(mean[2], 80.0);
   EXPECT_GT(mean[2], mean[1]);
+}
+
+// ------------------------------------------------------------------------------------------
+// Pool of outgoing messages (the simulator's image_raw / compressed)
+struct FakeImage
+{
+  std::vector<unsigned char> data;
+};
+
+TEST(MessagePool, ReusesAReleasedMessageWithoutAllocating)
+{
+  MessagePool<FakeImage, 3> pool;
+  const unsigned char* buffer = nullptr;
+  for (int frame = 0; frame < 10; ++frame)
+  {
+    boost::shared_ptr<FakeImage> m = pool.acquire();
+    m->data.resize(1000);  // capacity kept: no reallocation after the first frame
+    if (frame == 0)
+      buffer = m->data.data();
+    EXPECT_EQ(m->data.data(), buffer);
+  }  // released (a TCP publish has serialised it; no intra-process reader holds it)
+  EXPECT_EQ(pool.allocations(), 1u);
+}
+
+TEST(MessagePool, NeverHandsOutAMessageSomeoneHolds)
+{
+  MessagePool<FakeImage, 3> pool;
+  std::vector<boost::shared_ptr<FakeImage>> held;  // e.g. queued for a slow nodelet subscriber
+  for (int k = 0; k < 5; ++k)
+  {
+    held.push_back(pool.acquire());
+    for (size_t i = 0; i + 1 < held.size(); ++i)
+      EXPECT_NE(held[i].get(), held.back().get());
+  }
+  EXPECT_EQ(pool.allocations(), 5u);  // all 3 slots held: new messages, the held ones live on
+  held.erase(held.begin() + 3);       // a reader releases the 4th (its slot still holds it)
+  const boost::shared_ptr<FakeImage> again = pool.acquire();
+  EXPECT_EQ(pool.allocations(), 5u);  // reused, no allocation
+  for (const auto& h : held)
+    EXPECT_NE(h.get(), again.get());
 }
 
 int main(int argc, char** argv)

@@ -26,7 +26,7 @@ def cases():
         (info + ['_width:=8'], '~width'),
         (info + ['_jpeg_quality:=101'], '~jpeg_quality'),
         (info + ['_bones_file:=%s' % bad_vertices], '~bones_file'),
-        (info + ['_bones_file:=%s' % bad_vertices], 'expected 2 boxes'),
+        (info + ['_bones_file:=%s' % bad_vertices], 'unexpected end of file in box 0'),
         (info + ['_tools:=[{tip: PSM1/tool_tip}]'], '~tools'),
         (info + ['_tissue:={z0: .nan}'], 'tissue'),
         (info + ['_texture_extent:=-1'], '~texture_extent'),
