@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 import pytest
 
+from saras_drivers.bench_util import find_devel_executable
 from saras_drivers import endoscope_renderer as er
 from saras_drivers import rigid
 from saras_drivers.tissue_surface import TissueSurface
@@ -35,14 +36,7 @@ VERTICES = os.path.join(HERE, '..', '..', 'saras_collision', 'config', 'pelvis_v
 
 
 def find_cli():
-    prefixes = [p for p in os.environ.get('CMAKE_PREFIX_PATH', '').split(':') if p]
-    if os.environ.get('DEVEL_DIR'):
-        prefixes.insert(0, os.environ['DEVEL_DIR'])
-    for p in prefixes:
-        exe = os.path.join(p, 'lib', 'saras_drivers', 'endoscope_render')
-        if os.access(exe, os.X_OK):
-            return exe
-    return None
+    return find_devel_executable('endoscope_render')
 
 
 def quaternion(R):

@@ -1,5 +1,5 @@
-"""Small helpers of the saras_drivers benchmarks (bench/*.py): a free TCP port for a private
-roscore and the CPU time of a process. Linux /proc only."""
+"""Small helpers of the saras_drivers benchmarks (bench/*.py) and tests: a free TCP port for a
+private roscore, the CPU time of a process (Linux /proc) and a built executable of this package."""
 import os
 import socket
 
@@ -21,3 +21,16 @@ def cpu_seconds(pid):
     except OSError:
         return None
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def find_devel_executable(name, package='saras_drivers'):
+    """Path of the built executable ``lib/<package>/<name>`` in ``$DEVEL_DIR`` or, after it, the
+    prefixes of ``$CMAKE_PREFIX_PATH`` (a sourced devel or install space); None when not built."""
+    prefixes = [p for p in os.environ.get('CMAKE_PREFIX_PATH', '').split(':') if p]
+    if os.environ.get('DEVEL_DIR'):
+        prefixes.insert(0, os.environ['DEVEL_DIR'])
+    for p in prefixes:
+        exe = os.path.join(p, 'lib', package, name)
+        if os.access(exe, os.X_OK):
+            return exe
+    return None
