@@ -24,6 +24,7 @@ from concurrent.futures import ThreadPoolExecutor
 import cv2
 import numpy as np
 
+from saras_drivers.bench_util import find_devel_executable
 from saras_drivers import dvrk_motion as dm
 from saras_drivers import endoscope_renderer as er
 from saras_drivers import rigid
@@ -42,14 +43,7 @@ def measure(fn, n):
 
 
 def find_cli():
-    prefixes = [p for p in os.environ.get('CMAKE_PREFIX_PATH', '').split(':') if p]
-    if os.environ.get('DEVEL_DIR'):
-        prefixes.insert(0, os.environ['DEVEL_DIR'])
-    for p in prefixes:
-        exe = os.path.join(p, 'lib', 'saras_drivers', 'endoscope_render')
-        if os.access(exe, os.X_OK):
-            return exe
-    return None
+    return find_devel_executable('endoscope_render')
 
 
 def bench_cpp(frames):

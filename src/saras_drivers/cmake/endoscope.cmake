@@ -57,4 +57,16 @@ if(CATKIN_ENABLE_TESTING)
     ENDOSCOPE_TEST_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config")
   target_include_directories(${PROJECT_NAME}_endoscope_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
   target_link_libraries(${PROJECT_NAME}_endoscope_test ${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
+  # The renderer's hot loops are multiversioned (GCC target_clones: x86-64-v3 clone chosen at load
+  # time on this kind of machine); the same tests against the baseline x86-64 code alone, so that
+  # both code paths are tested on any machine.
+  catkin_add_gtest(${PROJECT_NAME}_endoscope_test_baseline test/endoscope/test_endoscope_core.cpp
+    src/endoscope/endoscope_camera.cpp src/endoscope/endoscope_renderer.cpp src/endoscope/endoscope_scene.cpp)
+  target_compile_definitions(${PROJECT_NAME}_endoscope_test_baseline PRIVATE SARAS_ENDOSCOPE_NO_MULTIVERSION
+    ENDOSCOPE_TEST_CONFIG_DIR="${PROJECT_SOURCE_DIR}/config")
+  target_compile_options(${PROJECT_NAME}_endoscope_test_baseline PRIVATE -O3)
+  target_include_directories(${PROJECT_NAME}_endoscope_test_baseline PRIVATE include)
+  target_include_directories(${PROJECT_NAME}_endoscope_test_baseline SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS}
+    ${OpenCV_INCLUDE_DIRS} ${catkin_INCLUDE_DIRS})
+  target_link_libraries(${PROJECT_NAME}_endoscope_test_baseline ${OpenCV_LIBRARIES} ${saras_collision_LIBRARIES})
 endif()

@@ -12,6 +12,21 @@
 
 #include <opencv2/imgproc.hpp>
 
+// The hot per-pixel loops (tissue solve + shading, bone ray casting) are multiversioned with GCC's
+// target_clones: an x86-64-v3 clone (AVX2 + FMA, 8-wide float, gathers) and the baseline x86-64
+// one, chosen once at load time (ifunc), as saras_collision's geometry. Debian builds for the
+// baseline; -DSARAS_ENDOSCOPE_NO_MULTIVERSION builds the baseline code alone.
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__x86_64__) && defined(__ELF__) && \
+    !defined(SARAS_ENDOSCOPE_NO_MULTIVERSION)
+#define SARAS_ENDOSCOPE_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
+// a lambda of a multiversioned function, inlined into each clone (an out-of-line lambda would be
+// compiled for the baseline only)
+#define SARAS_ENDOSCOPE_CLONE_INLINE __attribute__((always_inline))
+#else
+#define SARAS_ENDOSCOPE_MULTIVERSION
+#define SARAS_ENDOSCOPE_CLONE_INLINE
+#endif
+
 namespace saras_drivers
 {
 namespace endoscope
@@ -227,6 +242,7 @@ const cv::Mat& SceneRenderer::background(const Eigen::Isometry3d& T_world_cam)
 // ---------------------------------------------------------------------------------------------
 // Tissue: fixed-point iteration t <- (h(o + t d) - o_z) / d_z along the rays pointing down; t is
 // the optical depth (d = R (x, y, 1)). Texture coordinates (texels) are affine in t.
+SARAS_ENDOSCOPE_MULTIVERSION
 void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f& o)
 {
   const int h = rays_lo_x_.rows, w = rays_lo_x_.cols, n = opt_.texture_size;
@@ -248,7 +264,8 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
   // one row of rays: directions, start depth (tstart: previous solution, or the mean plane),
   // fixed-point iterations; iteration-major, so that the samples of a row are independent loads
   // (memory-level parallelism) while the iterations of one ray form a dependent chain
-  auto solveRow = [&](const float* rx, const float* ry, int count, const float* tstart, int iterations) {
+  auto solveRow = [&](const float* rx, const float* ry, int count, const float* tstart,
+                      int iterations) SARAS_ENDOSCOPE_CLONE_INLINE {
     for (int i = 0; i < count; ++i)
     {
       const Eigen::Vector3f d = R * Eigen::Vector3f(rx[i], ry[i], 1.f);
@@ -270,7 +287,7 @@ void SceneRenderer::solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f&
   row_gy_.resize(w);
   float* gxs = row_gx_.data();
   float* gys = row_gy_.data();
-  auto newtonRow = [&](int count, int iterations) {
+  auto newtonRow = [&](int count, int iterations) SARAS_ENDOSCOPE_CLONE_INLINE {
     for (int it = 0; it < iterations; ++it)
       for (int i = 0; i < count; ++i)
       {
@@ -588,6 +605,7 @@ struct SceneRenderer::BoxCam
   cv::Rect rect;
 };
 
+SARAS_ENDOSCOPE_MULTIVERSION
 void SceneRenderer::renderBoxes(const Eigen::Isometry3d& T_world_cam, const cv::Rect& depth_rect)
 {
   const Eigen::Isometry3d Tcw = T_world_cam.inverse();
