@@ -79,8 +79,8 @@ class ContactAudioTest(unittest.TestCase):
         self.assertGreater(mine[-1].rejected, 0)
 
     def test_wrong_pose_type(self):
-        """A publisher of another type on a tool's pose topic (the node receives serialised bytes,
-        rospy.AnyMsg): no crash, depth 0 for that tool, counted; the other tool is unaffected."""
+        """A publisher of another type on a tool's pose topic (rospy refuses the connection: the
+        md5sums differ): no crash, depth 0 for that tool, counted; the other tool is unaffected."""
         bad = rospy.Publisher('/mesa_right/ee_pose', PointStamped, queue_size=10)
         x, y = 0.01, 0.02
         h = float(self.surf.height(x, y))
