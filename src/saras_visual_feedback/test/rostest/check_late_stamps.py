@@ -127,11 +127,25 @@ class TestLateStamps(unittest.TestCase):
         self.assertTrue(vf, 'no heartbeat')
         self.assertIn('frames per colour', vf[-1].message)
         if expect == 'fallback':
-            # Counted and reported: WARN with the number of poses not at the image stamp.
-            self.assertEqual(vf[-1].level, ComponentStatus.WARN, vf[-1].message)
-            m = re.search(r'(\d+) poses/transforms not at the image stamp', vf[-1].message)
-            self.assertIsNotNone(m, vf[-1].message)
-            self.assertGreater(int(m.group(1)), 10)  # ~2 tools x 2 eyes x 30 Hz per period
+            # Counted and reported: WARN with the number of poses not at the image stamp. A heartbeat
+            # is also sent on every level change (checked at 10 Hz), so on a loaded host a 0.1 s
+            # gap between images gives an OK heartbeat and then a WARN one counting only a few
+            # fallbacks: judge the whole run, not the last heartbeat. Every fast_pose drawing is a
+            # fallback (2 poses cover ~2 ms, the images are 50 ms late), so the reported counts add
+            # up to about the fast_pose tips measured here (the warm-up frames are reported but not
+            # measured, the last <= 1 s is measured but not yet reported: half is the bound).
+            active = [s for s in vf if 'frames per colour' in s.message]
+            warn = [s for s in active if s.level == ComponentStatus.WARN]
+            self.assertGreater(len(warn), len(active) / 2, [s.message for s in active[-5:]])
+            reported = 0
+            for s in warn:
+                m = re.search(r'(\d+) poses/transforms not at the image stamp', s.message)
+                self.assertIsNotNone(m, s.message)
+                reported += int(m.group(1))
+            measured = sum(1 for c in checkers.values() for r in c.rows if r[0] == 'fast_pose')
+            rospy.loginfo('fallback heartbeats: %d WARN of %d, %d fallbacks reported, %d fast_pose tips measured',
+                          len(warn), len(active), reported, measured)
+            self.assertGreaterEqual(reported, measured / 2)
         else:
             # No fallback to the latest pose once the history covers the image stamps.
             self.assertEqual(vf[-1].level, ComponentStatus.OK, vf[-1].message)
