@@ -65,9 +65,11 @@ capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
 vf_start=$(( DURATION > 12 ? 2 : 0 ))
 for ((t = 0; t < DURATION; t++)); do
   if [ $t -eq $vf_start ]; then
-    # augmented stereo stream for the report: last pair + which warning colours occurred
+    # augmented stereo stream for the report: last pair + which warning colours occurred, sampled
+    # 1 s in every 4 s (a subscriber of the raw stereo streams all the time would cost the platform
+    # ~330 MB/s of copies and the overlay rendering, which is lazy)
     rosrun saras_visual_feedback visual_feedback_snapshot _output:="$REPORT/augmented_stereo" \
-      _duration:=$(( capture_at - vf_start - 1 )) >"$OUT/snapshot.log" 2>&1 &
+      _duration:=$(( capture_at - vf_start - 1 )) _window:=1.0 _period:=4.0 >"$OUT/snapshot.log" 2>&1 &
     snap_pid=$!
   fi
   sleep 1

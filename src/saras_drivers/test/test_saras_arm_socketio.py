@@ -222,3 +222,36 @@ def test_server_stall_shorter_than_ping_timeout_keeps_link():
         client.stop()
         server.stop()
 
+
+
+def test_utf8_check_skipped_but_malformed_text_still_refused(link):
+    """The connected client skips websocket-client's pure-Python UTF-8 loop; a text frame with
+    malformed UTF-8 is still refused (by bytes.decode in the reader), as it was by the check."""
+    import websocket
+    from saras_drivers.saras_arm_client import skip_utf8_validation
+    _, _, client, states, _ = link
+    ws = client.sio.eio.ws
+    assert ws.frame_buffer.skip_utf8_validation and ws.cont_frame.skip_utf8_validation
+    assert _wait(lambda: len(states) > 10, 5.0)          # states still arrive and parse
+
+    class _Feed:
+        """Byte source for a websocket-client frame reader: one masked-less text frame."""
+        def __init__(self, payload):
+            self.data = bytes([0x81, len(payload)]) + payload
+
+        def __call__(self, n):
+            out, self.data = self.data[:n], self.data[n:]
+            return out
+
+    bad = b'\xc3\x28 not utf-8'
+    sock = websocket.WebSocket()
+    assert skip_utf8_validation(sock)
+    sock.frame_buffer = websocket._abnf.frame_buffer(_Feed(bad), True)
+    frame = sock.frame_buffer.recv_frame()
+    frame.validate(sock.frame_buffer.skip_utf8_validation)  # no Python UTF-8 loop, no error here
+    sock.cont_frame.add(frame)
+    opcode, frame = sock.cont_frame.extract(frame)
+    assert opcode == websocket.ABNF.OPCODE_TEXT and frame.data == bad
+    with pytest.raises(UnicodeDecodeError):
+        frame.data.decode('utf-8')                         # what WebSocket.recv() does with text
+    assert not skip_utf8_validation(object())             # not a websocket: left alone
