@@ -65,11 +65,9 @@ capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
 vf_start=$(( DURATION > 12 ? 2 : 0 ))
 for ((t = 0; t < DURATION; t++)); do
   if [ $t -eq $vf_start ]; then
-    # augmented stereo stream for the report: last pair + which warning colours occurred, sampled
-    # 1 s in every 4 s (a subscriber of the raw stereo streams all the time would cost the platform
-    # ~330 MB/s of copies and the overlay rendering, which is lazy)
+    # augmented stereo stream for the report: last pair + which warning colours occurred
     rosrun saras_visual_feedback visual_feedback_snapshot _output:="$REPORT/augmented_stereo" \
-      _duration:=$(( capture_at - vf_start - 1 )) _window:=1.0 _period:=4.0 >"$OUT/snapshot.log" 2>&1 &
+      _duration:=$(( capture_at - vf_start - 1 )) >"$OUT/snapshot.log" 2>&1 &
     snap_pid=$!
   fi
   sleep 1
@@ -79,12 +77,14 @@ for ((t = 0; t < DURATION; t++)); do
   fi
 done
 
-[ -n "${snap_pid:-}" ] && wait "$snap_pid"
-colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
-echo "demo: visual feedback: $colours"
+# The recording lasts DURATION s; the snapshot (whose start-up takes 5-15 s on a loaded 2-core
+# host) may finish after it, while the platform still runs.
 echo "demo: stopping the recording"
 kill -INT "$record_pid" 2>/dev/null
 for ((t = 0; t < 20; t++)); do kill -0 "$record_pid" 2>/dev/null || break; sleep 0.5; done
+[ -n "${snap_pid:-}" ] && wait "$snap_pid"
+colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
+echo "demo: visual feedback: $colours"
 # after the recording: querying ~35 nodes over XML-RPC stalls the 2-core host for seconds
 echo "demo: capturing the parameters and the node graph"
 rosparam dump "$OUT/params.yaml" 2>/dev/null || true
