@@ -30,6 +30,18 @@ cleanup() {
   for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
 }
 trap cleanup EXIT
+# stop_pid PID NAME: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and SIGKILL to
+# it and its children (a killed roslaunch would leave its nodes running).
+stop_pid() {
+  kill -INT "$1" 2>/dev/null
+  for ((t = 0; t < 40; t++)); do kill -0 "$1" 2>/dev/null || break; sleep 0.5; done
+  if kill -0 "$1" 2>/dev/null; then
+    echo "demo: $2 did not stop, terminating it and its children"
+    pkill -TERM -P "$1" 2>/dev/null; kill -TERM "$1" 2>/dev/null; sleep 2
+    pkill -KILL -P "$1" 2>/dev/null; kill -KILL "$1" 2>/dev/null
+  fi
+  wait "$1" 2>/dev/null
+}
 
 # Virtual display for rviz (software GL); the screenshot shows what a user would see.
 display_num=$(( 90 + RANDOM % 100 ))
@@ -59,6 +71,14 @@ rosrun saras_bringup recorder --config "$(rospack find saras_bringup)/config/rec
   --output "$OUT/platform.bag" __name:=recorder >"$OUT/recorder.log" 2>&1 &
 record_pid=$!
 pids=("$record_pid" "${pids[@]}")
+# The recorder's start-up (two rosruns, Python, 38 subscriptions) takes 5-15 s on a loaded 2-core
+# host: DURATION counts from the moment it records (bag_recorder opens platform.bag.active, then
+# subscribes; its log is block-buffered in a file, so the file is the signal).
+for ((t = 0; t < 300; t++)); do
+  [ -e "$OUT/platform.bag.active" ] && break
+  kill -0 "$record_pid" 2>/dev/null || { echo "demo: the recorder stopped; see $OUT/recorder.log"; exit 2; }
+  sleep 0.2
+done
 sleep 1
 
 capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
@@ -90,10 +110,7 @@ echo "demo: capturing the parameters and the node graph"
 rosparam dump "$OUT/params.yaml" 2>/dev/null || true
 python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
 echo "demo: stopping the platform"
-kill -INT "$launch_pid" 2>/dev/null
-for ((t = 0; t < 40; t++)); do kill -0 "$launch_pid" 2>/dev/null || break; sleep 0.5; done
-kill -0 "$launch_pid" 2>/dev/null && { echo "demo: roslaunch did not stop, terminating"; kill -TERM "$launch_pid"; }
-wait "$launch_pid" 2>/dev/null
+stop_pid "$launch_pid" roslaunch
 if [ -f "$OUT/platform.bag.active" ] && [ ! -f "$OUT/platform.bag" ]; then
   echo "demo: bag was not closed cleanly, reindexing"
   rosbag reindex "$OUT/platform.bag.active" >/dev/null && mv "$OUT/platform.bag.active" "$OUT/platform.bag"
@@ -109,10 +126,11 @@ replay_port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1"
 ROS_MASTER_URI="http://127.0.0.1:$replay_port" roslaunch -p "$replay_port" saras_bringup replay.launch \
   bag:="$OUT/platform.bag" >"$OUT/replay.log" 2>&1 &
 replay_pid=$!
+pids=("$replay_pid" "${pids[@]}")
 sleep "${RVIZ_WAIT:-20}"
 python3 -c "from PIL import ImageGrab; ImageGrab.grab(xdisplay='$DISPLAY').save('$REPORT/rviz.png')" \
   || echo "demo: rviz screenshot failed"
-kill -INT "$replay_pid" 2>/dev/null; wait "$replay_pid" 2>/dev/null
+stop_pid "$replay_pid" "the replay"
 
 # Calibration accuracy table (issue: hand-eye vs every OpenCV method, with and without outliers)
 echo "demo: hand-eye calibration benchmark (${HANDEYE_TRIALS:-10} trials per scenario)"
