@@ -6,16 +6,19 @@
 #ifndef SARAS_TELEOP_NODE_COMMON_H
 #define SARAS_TELEOP_NODE_COMMON_H
 
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/Wrench.h>
 #include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <saras_msgs/ComponentStatus.h>
 
@@ -174,9 +177,55 @@ private:
 };
 
 /**
+ * A callback queue served by one thread of its own. A nodelet's own queue is served by the nodelet
+ * manager in two steps (nodelet::detail::CallbackQueueManager: the queue notifies the manager
+ * thread, which hands it to a worker thread), i.e. two thread wake-ups per intra-process hop; a
+ * subscription on this queue wakes exactly one thread, the one that runs the callback. The thread
+ * inherits the scheduling policy of its creator (the manager's, e.g. SCHED_FIFO under chrt).
+ * Callbacks of one queue never run concurrently.
+ */
+class DedicatedCallbackThread
+{
+public:
+  DedicatedCallbackThread() = default;
+  DedicatedCallbackThread(const DedicatedCallbackThread&) = delete;
+  DedicatedCallbackThread& operator=(const DedicatedCallbackThread&) = delete;
+  ~DedicatedCallbackThread() { stop(); }
+
+  ros::CallbackQueue* queue() { return &queue_; }
+
+  /// Start serving the queue (idempotent).
+  void start()
+  {
+    if (thread_.joinable())
+      return;
+    running_ = true;
+    thread_ = std::thread([this] {
+      while (running_ && ros::ok())
+        queue_.callAvailable(ros::WallDuration(kWait));
+    });
+  }
+
+  /// Stop and join the thread (callbacks already queued are dropped by the queue's destructor).
+  void stop()
+  {
+    running_ = false;
+    if (thread_.joinable())
+      thread_.join();
+  }
+
+private:
+  static constexpr double kWait = 0.1;  ///< [s] longest wait for a callback before re-checking running_
+  ros::CallbackQueue queue_;
+  std::atomic<bool> running_{ false };
+  std::thread thread_;
+};
+
+/**
  * Nodelet wrapper of a node class `Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)`.
  * The node object lives as long as the nodelet; all its callbacks (subscriptions and timers) run on
- * the nodelet's single-threaded callback queue, so the node class needs no locking. A std::exception
+ * one thread: by default a DedicatedCallbackThread of its own (~dedicated_thread true), else the
+ * nodelet's single-threaded callback queue served by the manager; so the node class needs no locking. A std::exception
  * from the constructor (bad parameter) is logged with ROS_FATAL naming the nodelet and rethrown:
  * the manager refuses the nodelet and the loader (`nodelet load` or the standalone executable)
  * exits non-zero.
@@ -184,12 +233,33 @@ private:
 template <class Node>
 class NodeletAdapter : public nodelet::Nodelet
 {
+public:
+  ~NodeletAdapter() override
+  {
+    thread_.stop();  // no callback runs while the node is destroyed (it unsubscribes)
+    node_.reset();
+  }
+
 private:
   void onInit() override
   {
     try
     {
-      node_.reset(new Node(getNodeHandle(), getPrivateNodeHandle(), getName().substr(getName().empty() ? 0 : 1)));
+      // ~dedicated_thread (bool, default true, read once): serve this node's callbacks from a
+      // thread of its own (one wake-up per intra-process hop) instead of the manager's workers.
+      bool dedicated = true;
+      ros::NodeHandle& pnh0 = getPrivateNodeHandle();
+      if (pnh0.hasParam("dedicated_thread") && !pnh0.getParam("dedicated_thread", dedicated))
+        throw std::invalid_argument("parameter '" + pnh0.resolveName("dedicated_thread") + "' must be a boolean");
+      ros::NodeHandle nh = getNodeHandle(), pnh = pnh0;
+      if (dedicated)
+      {
+        nh.setCallbackQueue(thread_.queue());
+        pnh.setCallbackQueue(thread_.queue());
+      }
+      node_.reset(new Node(nh, pnh, getName().substr(getName().empty() ? 0 : 1)));
+      if (dedicated)
+        thread_.start();
     }
     catch (const std::exception& e)
     {
@@ -197,6 +267,7 @@ private:
       throw;
     }
   }
+  DedicatedCallbackThread thread_;  // declared before node_: destroyed after it
   std::unique_ptr<Node> node_;
 };
 
