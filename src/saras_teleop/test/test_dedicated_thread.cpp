@@ -47,20 +47,28 @@ private:
   std::vector<int>& order_;
   int tag_;
 };
-}  // namespace
 
-TEST(DedicatedCallbackThread, OneThreadNoOverlapInOrder)
+/// The thread under test and what its callbacks record.
+class DedicatedCallbackThreadTest : public ::testing::Test
 {
-  saras_teleop::node::DedicatedCallbackThread t;
+protected:
+  boost::shared_ptr<Probe> probe(int tag) { return boost::make_shared<Probe>(inside, max_inside, m, ids, order, tag); }
+
   std::atomic<int> inside{ 0 }, max_inside{ 0 };
   std::mutex m;
   std::set<std::thread::id> ids;
   std::vector<int> order;
+  saras_teleop::node::DedicatedCallbackThread t;  // last: stopped before what its callbacks touch
+};
+}  // namespace
+
+TEST_F(DedicatedCallbackThreadTest, OneThreadNoOverlapInOrder)
+{
   t.start();
   constexpr int kPerProducer = 500;
   auto produce = [&](int base) {
     for (int i = 0; i < kPerProducer; ++i)
-      t.queue()->addCallback(boost::make_shared<Probe>(inside, max_inside, m, ids, order, base + i));
+      t.queue()->addCallback(probe(base + i));
   };
   std::thread a(produce, 0), b(produce, 100000);
   a.join();
@@ -88,16 +96,11 @@ TEST(DedicatedCallbackThread, OneThreadNoOverlapInOrder)
   }
 }
 
-TEST(DedicatedCallbackThread, StoppedThreadRunsNothing)
+TEST_F(DedicatedCallbackThreadTest, StoppedThreadRunsNothing)
 {
-  saras_teleop::node::DedicatedCallbackThread t;
-  std::atomic<int> inside{ 0 }, max_inside{ 0 };
-  std::mutex m;
-  std::set<std::thread::id> ids;
-  std::vector<int> order;
   t.start();
   t.stop();
-  t.queue()->addCallback(boost::make_shared<Probe>(inside, max_inside, m, ids, order, 1));
+  t.queue()->addCallback(probe(1));
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   std::lock_guard<std::mutex> lock(m);
   EXPECT_TRUE(order.empty());
