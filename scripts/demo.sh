@@ -100,8 +100,7 @@ done
 # The recording lasts DURATION s; the snapshot (whose start-up takes 5-15 s on a loaded 2-core
 # host) may finish after it, while the platform still runs.
 echo "demo: stopping the recording"
-kill -INT "$record_pid" 2>/dev/null
-for ((t = 0; t < 20; t++)); do kill -0 "$record_pid" 2>/dev/null || break; sleep 0.5; done
+stop_pid "$record_pid" "the recorder"
 [ -n "${snap_pid:-}" ] && wait "$snap_pid"
 colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
 echo "demo: visual feedback: $colours"
