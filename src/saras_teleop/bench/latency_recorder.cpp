@@ -40,12 +40,20 @@ class LatencyRecorder : public nodelet::Nodelet
 
   void onInit() override
   {
-    // Arrivals are taken on a thread of its own (one wake-up, as the teleop nodes' dedicated
-    // threads), not through the manager's two-step dispatch, so the recorder adds no hand-off of
-    // the manager to what it measures.
+    // ~callback_thread: `own` (default): arrivals are taken on a thread of its own (one wake-up
+    // per observation), not through the manager's two-step dispatch, so the recorder adds no
+    // hand-off of the manager to what it measures; `shared`: on the global callback queue, i.e. the
+    // thread that runs the teleop nodes with callback_thread `shared` (NodeletAdapter): each
+    // arrival is then the instant the chain's own executor reaches that output, with no wake-up of
+    // the recorder in it.
     ros::NodeHandle nh = getNodeHandle();
-    nh.setCallbackQueue(thread_.queue());
     ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::string mode;
+    pnh.param<std::string>("callback_thread", mode, "own");
+    if (mode != "own" && mode != "shared")
+      throw std::invalid_argument("parameter ~callback_thread must be own or shared, got '" + mode + "'");
+    own_thread_ = mode == "own";
+    nh.setCallbackQueue(own_thread_ ? thread_.queue() : ros::getGlobalCallbackQueue());
     pnh.param("duration", duration_, 10.0);
     pnh.param("warmup", warmup_, 2.0);
     pnh.param<std::string>("output", output_, "/tmp/teleop_latency_recorder.txt");
@@ -72,7 +80,8 @@ class LatencyRecorder : public nodelet::Nodelet
     subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
         "/mesa_left/target_pose", 100,
         [this](const geometry_msgs::PoseStamped::ConstPtr& m) { add(4, m->header.stamp); }, ros::VoidConstPtr(), fast));
-    thread_.start();
+    if (own_thread_)
+      thread_.start();
   }
 
 public:
@@ -173,6 +182,7 @@ private:
   }
 
   std::mutex mutex_;
+  bool own_thread_ = true;                 ///< arrivals on thread_ (else on the global queue)
   node::DedicatedCallbackThread thread_;  // declared before subs_: destroyed after them
   std::vector<ros::Subscriber> subs_;
   std::vector<Sample> arrivals_[kHops];

@@ -223,9 +223,19 @@ private:
 
 /**
  * Nodelet wrapper of a node class `Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)`.
- * The node object lives as long as the nodelet; all its callbacks (subscriptions and timers) run on
- * one thread: the nodelet's single-threaded callback queue served by the manager (default), or a
- * DedicatedCallbackThread of its own (~dedicated_thread true); so the node class needs no locking. A std::exception
+ * The node object lives as long as the nodelet; its callbacks (subscriptions and timers) never run
+ * concurrently, so the node class needs no locking. Which thread runs them is the parameter
+ * `callback_thread` (string, read once; the private `~callback_thread`, else the nearest one up the
+ * namespace tree, NodeHandle::searchParam, so a launch file sets it once for a group of nodelets):
+ *   - `manager` (default): the nodelet's single-threaded queue, served by the manager's worker threads
+ *     (nodelet::detail::CallbackQueueManager: two thread wake-ups per intra-process hop);
+ *   - `own`: a DedicatedCallbackThread of this nodelet (one wake-up per hop);
+ *   - `shared`: the process's global callback queue (ros::getGlobalCallbackQueue()), which the nodelet
+ *     manager's main thread serves with ros::spin(): every nodelet with `shared` runs on that one thread,
+ *     so a message published from one of their callbacks is handled by the next, right after the
+ *     current callback returns, without any thread wake-up; the hops of a chain of such nodelets cost
+ *     no context switch. (The manager's load/unload services share that thread.)
+ * A std::exception
  * from the constructor (bad parameter) is logged with ROS_FATAL naming the nodelet and rethrown:
  * the manager refuses the nodelet and the loader (`nodelet load` or the standalone executable)
  * exits non-zero.
@@ -245,23 +255,18 @@ private:
   {
     try
     {
-      // ~dedicated_thread (bool, default false, read once): serve this node's callbacks from a
-      // thread of its own (one wake-up per intra-process hop) instead of the manager's workers.
-      // Off by default: in the saturated 2-core platform the manager's workers, which run several
-      // nodelets' callbacks per wake-up, kept the 250 Hz streams at nominal where 14 threads woken
-      // one by one did not (demo: 231 vs 132 Hz); on the latency bench no difference was measurable.
-      bool dedicated = false;
-      ros::NodeHandle& pnh0 = getPrivateNodeHandle();
-      if (pnh0.hasParam("dedicated_thread") && !pnh0.getParam("dedicated_thread", dedicated))
-        throw std::invalid_argument("parameter '" + pnh0.resolveName("dedicated_thread") + "' must be a boolean");
-      ros::NodeHandle nh = getNodeHandle(), pnh = pnh0;
-      if (dedicated)
+      const std::string mode = callbackThreadParam();
+      ros::NodeHandle nh = getNodeHandle(), pnh = getPrivateNodeHandle();
+      ros::CallbackQueue* queue = mode == "own"    ? thread_.queue() :
+                                  mode == "shared" ? ros::getGlobalCallbackQueue() :
+                                                     nullptr;
+      if (queue != nullptr)
       {
-        nh.setCallbackQueue(thread_.queue());
-        pnh.setCallbackQueue(thread_.queue());
+        nh.setCallbackQueue(queue);
+        pnh.setCallbackQueue(queue);
       }
       node_.reset(new Node(nh, pnh, getName().substr(getName().empty() ? 0 : 1)));
-      if (dedicated)
+      if (mode == "own")
         thread_.start();
     }
     catch (const std::exception& e)
@@ -270,6 +275,18 @@ private:
       throw;
     }
   }
+  /// The `callback_thread` parameter (see the class comment), validated.
+  std::string callbackThreadParam()
+  {
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::string key, mode = "manager";
+    if (!pnh.searchParam("callback_thread", key))
+      return mode;
+    if (!pnh.getParam(key, mode) || (mode != "manager" && mode != "own" && mode != "shared"))
+      throw std::invalid_argument("parameter '" + key + "' must be one of the strings manager, own, shared");
+    return mode;
+  }
+
   DedicatedCallbackThread thread_;  // declared before node_: destroyed after it
   std::unique_ptr<Node> node_;
 };
