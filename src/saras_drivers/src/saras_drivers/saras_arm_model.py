@@ -193,18 +193,22 @@ class SarasArmModel(object):
             return False
         n = max(1, int(math.ceil(dt / self.max_step - 1e-9)))
         h = dt / n
+        # plain floats: numpy's per-call overhead on 6-vectors was most of this loop's cost (the
+        # simulator calls it for every state sample and command); same operations, same rounding
+        q, target, speed = self.q.tolist(), self.target.tolist(), self._speed.tolist()
         for _ in range(n):
-            err = self.target - self.q
-            scale = np.max(np.abs(err) / (self._speed * h))
+            err = [t - x for t, x in zip(target, q)]
+            scale = max(abs(e) / (v * h) for e, v in zip(err, speed))
             if scale <= 1.0:
-                self.q[:] = self.target
+                q = target
                 break                  # reached: the remaining sub-steps would not move
-            self.q += err / scale
+            q = [x + e / scale for x, e in zip(q, err)]
+        self.q[:] = q
         return self.moving
 
     @property
     def moving(self):
-        return bool(np.any(self.q != self.target))
+        return self.q.tolist() != self.target.tolist()
 
     # ------------------------------------------------------------------ state
     def tip_in_base(self, q=None):
