@@ -36,3 +36,16 @@ def test_state_round_trip():
     s['joints'] = s['joints'][:5]
     with pytest.raises(proto.ProtocolError):
         proto.parse_state(s)
+
+
+def test_flow_control_payloads():
+    assert proto.parse_subscribe_state(None) == 0 and proto.parse_subscribe_state({}) == 0
+    assert proto.parse_subscribe_state({'window': 30}) == 30
+    assert proto.parse_state_ack({'received': 12}) == 12
+    for bad in ({'window': -1}, {'window': 2.5}, {'window': True}, {'window': 'a'}, [], 'x'):
+        with pytest.raises(proto.ProtocolError) as e:
+            proto.parse_subscribe_state(bad)
+        assert e.value.code == proto.BAD_PAYLOAD
+    for bad in (None, {}, {'received': -3}, {'received': 1.0}, {'received': None}, [1]):
+        with pytest.raises(proto.ProtocolError):
+            proto.parse_state_ack(bad)

@@ -209,6 +209,75 @@ def test_slow_consumer_bounded_queue_and_link_kept():
     assert max(lag[len(lag) // 2:]) <= 30, lag
 
 
+def _slow_reader(client, seconds):
+    """Make the client's websocket reader take ``seconds`` per state event (a reader thread
+    starved of CPU): the states then wait in the socket buffers, not in the client's mailbox."""
+    handler = client.sio.handlers[proto.NAMESPACE][proto.EV_STATE]
+
+    def slow(payload):
+        time.sleep(seconds)
+        handler(payload)
+    client.sio.handlers[proto.NAMESPACE][proto.EV_STATE] = slow
+
+
+@pytest.mark.parametrize('window', [30, 0])
+def test_slow_reader_state_age_bounded_by_flow_control(window):
+    # a reader at <= 100 states/s against a 300 Hz stream for 4 s: with flow control the server
+    # keeps <= window states in flight and skips the rest, so the age of a received state stays
+    # near window / (read rate) = 0.3 s; without it (window 0, the old protocol) the kernel's
+    # socket buffers hold a growing backlog (measured 2.7 s at the end)
+    model, server, port = _stream(state_rate=300.0)
+    got = []
+    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+                            state_window=window,
+                            on_state=lambda s: got.append((time.time(), time.time() - s['time'], s['seq'])))
+    _slow_reader(client, 0.01)
+    client.start()
+    try:
+        assert client.wait_connected(5.0)
+        t0 = time.time()
+        time.sleep(4.0)
+        assert client.connected and client.connections == 1
+    finally:
+        client.stop()
+        server.stop()
+    late = [age for t, age, _ in got if t > t0 + 3.0]
+    seqs = [q for _, _, q in got]
+    assert late and seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
+    if window:
+        assert max(late) < 0.6, max(late)
+        assert server.state_skipped > 300               # the samples beyond the window
+        assert server.rejected == 0                     # every state_ack well-formed
+    else:
+        assert max(late) > 1.0, max(late)
+        assert server.state_skipped == 0                # the queue check never saw it
+
+
+def test_malformed_flow_control_refused_and_counted():
+    import socketio
+    model, server, port = _stream()
+    sio = socketio.Client(reconnection=False)
+    seen = []
+    sio.on(proto.EV_STATE, seen.append)
+    try:
+        sio.connect('http://127.0.0.1:%d' % port, transports=['websocket'], wait_timeout=2)
+        r = sio.call(proto.EV_SUBSCRIBE_STATE, {'window': -2}, timeout=2.0)
+        assert not r['ok'] and r['code'] == proto.BAD_PAYLOAD and not server.subscribers
+        for bad in ({'received': 'x'}, None, [1], {'received': -1}):
+            sio.emit(proto.EV_STATE_ACK, bad)
+        r = sio.call(proto.EV_SUBSCRIBE_STATE, {'window': 5}, timeout=2.0)
+        assert r['ok']
+        assert _wait(lambda: len(seen) >= 5, 2.0)
+        time.sleep(0.3)
+        assert len(seen) == 5                            # never acked: 5 in flight, then skips
+        assert server.rejected == 5 and server.state_skipped > 10
+        sio.emit(proto.EV_STATE_ACK, {'received': 5})   # acknowledged: the stream resumes
+        assert _wait(lambda: len(seen) >= 10, 2.0)
+    finally:
+        sio.disconnect()
+        server.stop()
+
+
 def test_server_stall_shorter_than_ping_timeout_keeps_link():
     model, server, port = _stream(ping_interval=0.2, ping_timeout=1.5)
     client = SarasArmClient('http://127.0.0.1:%d' % port, backoff_initial=0.05, backoff_max=0.1)

@@ -17,7 +17,12 @@ Client -> server events (the server answers every one with a Socket.IO acknowled
                      max_velocity * insertion_ratio [m/s] (ratio published in ``info``)
 ``set_clip``         ``{"id": int, "jaw": float | null, "roll": float | null}``   [rad], null = keep
 ``hold``             ``{"id": int}``  stop: target := current joints
-``subscribe_state``  ``{}``          join the ``state`` stream (the ack carries ``info``)
+``subscribe_state``  ``{"window": int}`` (optional) join the ``state`` stream (the ack carries
+                     ``info``); with ``window`` >= 1 the server keeps at most that many states
+                     in flight to this client (sent, not yet reported received by ``state_ack``)
+                     and skips samples beyond it, so a reader slower than the stream gets recent
+                     states instead of a growing backlog
+``state_ack``        ``{"received": int}`` states received on this connection so far (no answer)
 
 Server -> client events:
 
@@ -36,6 +41,7 @@ EV_SET_MAX_VELOCITY = 'set_max_velocity'
 EV_SET_CLIP = 'set_clip'
 EV_HOLD = 'hold'
 EV_SUBSCRIBE_STATE = 'subscribe_state'
+EV_STATE_ACK = 'state_ack'
 EV_STATE = 'state'
 EV_ERROR = 'error'
 STATE_ROOM = 'state'
@@ -147,6 +153,27 @@ def parse_set_clip(payload):
 
 def parse_hold(payload):
     return _id(_dict(payload or {}))
+
+
+def _count(payload, key):
+    v = _dict(payload).get(key)
+    if not isinstance(v, int) or isinstance(v, bool) or v < 0:
+        raise ProtocolError(BAD_PAYLOAD, '%s must be an integer >= 0, got %r' % (key, v))
+    return v
+
+
+def parse_subscribe_state(payload):
+    """:return: the flow-control window [states] (0 = none: every sample is sent)."""
+    if payload is None or payload == {}:
+        return 0
+    if _dict(payload).get('window') is None:
+        return 0
+    return _count(payload, 'window')
+
+
+def parse_state_ack(payload):
+    """:return: the number of states the client received on this connection."""
+    return _count(payload, 'received')
 
 
 def make_state(seq, t, joints, ee_position, ee_orientation, rcm_position, moving, max_velocity,

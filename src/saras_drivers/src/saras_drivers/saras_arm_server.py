@@ -15,6 +15,11 @@ python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
 * back-pressure: a client whose Engine.IO send queue still holds ``max_backlog`` packets (it reads
   slower than the stream for a while) skips that state sample (counted in ``state_skipped``), so neither the
   state latency nor the Engine.IO ping behind it grows without bound;
+* flow control: a client that subscribed with a ``window`` gets at most that many states in flight
+  (sent, not yet reported received by its ``state_ack``); further samples are skipped (counted in
+  ``state_skipped``). The Engine.IO queue check alone does not bound the latency: the kernel's
+  autotuned socket buffers (MBs on loopback) hold seconds of states in front of a reader that is
+  slower than the stream (a starved client process), and the queue stays empty meanwhile;
 * when the client that commanded motion disconnects, the arm holds (target := current joints).
 """
 
@@ -69,6 +74,7 @@ class SarasArmServer(object):
         self.state_skipped = 0       # state samples not sent to a backlogged client
         self.missed = 0              # grid samples lost to a wake-up later than max_catch_up periods
         self.subscribers = set()     # sids in the state stream
+        self._flow = {}              # sid -> [window, states sent, states the client received]
         self._period = 1.0 / self.state_rate
         self._deadline = time.monotonic() + self._period   # next sample instant (monotonic)
         self._emit_lock = None       # asyncio.Lock, created in the server's loop
@@ -98,6 +104,7 @@ class SarasArmServer(object):
             self.clients -= 1
             self.sids.discard(sid)
             self.subscribers.discard(sid)
+            self._flow.pop(sid, None)
             if sid == self.commander:
                 now = time.monotonic()
                 await self._sample_until(now)
@@ -161,11 +168,32 @@ class SarasArmServer(object):
 
         @sio.on(proto.EV_SUBSCRIBE_STATE)
         async def subscribe_state(sid, payload=None):
+            try:
+                window = proto.parse_subscribe_state(payload)
+            except proto.ProtocolError as e:
+                self.rejected += 1
+                return proto.reply(False, e.code, e.message)
             self.sio.enter_room(sid, proto.STATE_ROOM)
             self.subscribers.add(sid)
+            if window > 0:
+                self._flow[sid] = [window, 0, 0]
+            else:
+                self._flow.pop(sid, None)
             r = proto.reply(True)
             r['info'] = self.info()
             return r
+
+        @sio.on(proto.EV_STATE_ACK)
+        async def state_ack(sid, payload=None):
+            # no answer (sent ~30 times/s); a malformed one is counted and ignored
+            try:
+                received = proto.parse_state_ack(payload)
+            except proto.ProtocolError:
+                self.rejected += 1
+                return
+            flow = self._flow.get(sid)
+            if flow is not None:
+                flow[2] = max(flow[2], received)
 
     def info(self):
         m = self.model
@@ -223,9 +251,12 @@ class SarasArmServer(object):
                 if self.subscribers:
                     state = self.state()
                     for sid in list(self.subscribers):
-                        if self._backlogged(sid):
+                        flow = self._flow.get(sid)
+                        if self._backlogged(sid) or (flow is not None and flow[1] - flow[2] >= flow[0]):
                             self.state_skipped += 1
                             continue
+                        if flow is not None:
+                            flow[1] += 1
                         await self.sio.emit(proto.EV_STATE, state, to=sid)
                 self._deadline += period
 
