@@ -320,14 +320,22 @@ public:
     pnh.getParam("targets", target_specs_);
     pending_target_ = paramString(pnh, "target", "none");
 
+    // Outgoing queue per subscriber of the recorded streams (compressed + camera_info): a recorder
+    // that stalls for a few frames must not lose them (a queue of 2 lost one frame to a 250 ms
+    // recorder stall in a 2-core demo). The raw images (2.7 MB each at 720p) keep 2: live only.
+    const int recorded_queue = paramInt(pnh, "recorded_queue", 30);
+    if (recorded_queue < 1 || recorded_queue > 1000)
+      fail("parameter ~recorded_queue must be in [1, 1000] messages");
     tf_buffer_.reset(new tf2_ros::Buffer(ros::Duration(10.0)));
     tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh, true));  // own thread: /tf off our queue
     for (int e = 0; e < 2; ++e)
     {
       const std::string eye = kEyes[e];
       pub_img_[e] = nh.advertise<sensor_msgs::Image>(ns + eye + "/image_raw", 2);
-      pub_jpg_[e] = nh.advertise<sensor_msgs::CompressedImage>(ns + eye + "/image_raw/compressed", 2);
-      pub_info_[e] = nh.advertise<sensor_msgs::CameraInfo>(ns + eye + "/camera_info", 2);
+      pub_jpg_[e] = nh.advertise<sensor_msgs::CompressedImage>(ns + eye + "/image_raw/compressed",
+                                                               static_cast<uint32_t>(recorded_queue));
+      pub_info_[e] = nh.advertise<sensor_msgs::CameraInfo>(ns + eye + "/camera_info",
+                                                           static_cast<uint32_t>(recorded_queue));
       eye_[e].width = width;
       eye_[e].height = height;
     }

@@ -30,6 +30,7 @@ def cases():
         (info + ['_tools:=[{tip: PSM1/tool_tip}]'], '~tools'),
         (info + ['_tissue:={z0: .nan}'], 'tissue'),
         (info + ['_texture_extent:=-1'], '~texture_extent'),
+        (info + ['_recorded_queue:=0'], '~recorded_queue'),
     ]
 
 
