@@ -7,6 +7,7 @@ DURATION ?= 30
 OUT ?= $(CURDIR)/out/demo
 ARGS ?=
 CONTROL_RATE ?=
+ENDOSCOPE_SIZE ?=
 
 .PHONY: all setup build test demo bench lint run clean
 
@@ -22,7 +23,7 @@ test: build
 	@bash scripts/run_tests.sh
 
 demo: build
-	@CONTROL_RATE="$(CONTROL_RATE)" bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
+	@CONTROL_RATE="$(CONTROL_RATE)" ENDOSCOPE_SIZE="$(ENDOSCOPE_SIZE)" bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
 
 run: build
 	@bash -c 'source scripts/env.sh && roslaunch launch/platform.launch $(ARGS)'

@@ -10,6 +10,9 @@
 # CONTROL_RATE (console stream + teleoperation loop, Hz): default 1000 (D7.2) on machines with at
 # least 4 cores; 250 on smaller machines, where ~35 processes cannot all run a 1 kHz loop
 # (see README, "Resource budget"). The bag check judges the control streams against this rate.
+# ENDOSCOPE_SIZE (rendered stereo endoscope, WIDTHxHEIGHT): default 1280x720 on machines with at least
+# 4 cores; 640x360 on smaller ones, where rendering, overlay and JPEG of two 720p eyes at 30 fps take
+# about a core and starve the simulators (README, "Resource budget").
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 DURATION="${1:-30}"; OUT="${2:-$here/../out/demo}"; shift $(( $# >= 2 ? 2 : $# ))
@@ -53,9 +56,16 @@ sleep 1
 if [ -z "${CONTROL_RATE:-}" ]; then
   if [ "$(nproc)" -ge 4 ]; then CONTROL_RATE=1000; else CONTROL_RATE=250; fi
 fi
-echo "demo: platform for ${DURATION}s, ROS master :$port, display $DISPLAY, output $OUT, control rate ${CONTROL_RATE} Hz"
+if [ -z "${ENDOSCOPE_SIZE:-}" ]; then
+  if [ "$(nproc)" -ge 4 ]; then ENDOSCOPE_SIZE=1280x720; else ENDOSCOPE_SIZE=640x360; fi
+fi
+if ! [[ "$ENDOSCOPE_SIZE" =~ ^([0-9]+)x([0-9]+)$ ]]; then
+  echo "demo: ENDOSCOPE_SIZE must be WIDTHxHEIGHT (e.g. 1280x720), got '$ENDOSCOPE_SIZE'" >&2; exit 2
+fi
+endo_w="${BASH_REMATCH[1]}"; endo_h="${BASH_REMATCH[2]}"
+echo "demo: platform for ${DURATION}s, ROS master :$port, display $DISPLAY, output $OUT, control rate ${CONTROL_RATE} Hz, endoscope ${endo_w}x${endo_h}"
 roslaunch -p "$port" "$SARAS_WS/launch/platform.launch" sim:=true rviz:=false record:=false \
-  control_rate:="$CONTROL_RATE" "$@" >"$OUT/launch.log" 2>&1 &
+  control_rate:="$CONTROL_RATE" endoscope_width:="$endo_w" endoscope_height:="$endo_h" "$@" >"$OUT/launch.log" 2>&1 &
 launch_pid=$!
 pids=("$launch_pid" "${pids[@]}")
 
