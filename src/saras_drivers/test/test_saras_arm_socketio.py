@@ -177,6 +177,49 @@ def test_server_stall_keeps_rate_and_sample_times():
     assert np.all(np.abs(np.diff(q[:, :2], axis=0)) <= 2.0 / 250.0 + 1e-9)
 
 
+def test_overloaded_server_grid_stays_on_real_time():
+    # every state emission costs 4 ms of the server's loop (a simulator starved of CPU: it cannot
+    # emit 300 states/s) while set-points arrive at 250 Hz: samples are lost and counted, but the
+    # grid and so the sample times stay on real time. The grid used to be re-anchored on times
+    # taken before waiting for the emission lock, which got older behind the queued commands:
+    # sample times trailed real time by seconds (19 s in a platform demo) with few samples
+    # counted as missed.
+    model, server, port = _stream(state_rate=300.0)
+    emit = server.sio.emit
+
+    async def slow_emit(*args, **kwargs):
+        time.sleep(0.004)
+        await emit(*args, **kwargs)
+    server.sio.emit = slow_emit
+    got = []
+    reader = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+                            on_state=lambda s: got.append((time.time(), s['time'])))
+    commander = SarasArmClient('http://127.0.0.1:%d' % port, hold_on_connect=False)
+    reader.start()
+    commander.start()
+    try:
+        assert reader.wait_connected(5.0) and commander.wait_connected(5.0)
+        q0 = model.q.copy()
+        t0 = time.time()
+        k = 0
+        while time.time() < t0 + 4.0:
+            near = q0.copy()
+            near[:2] += 0.05 * np.sin(0.5 * k / 250.0)
+            commander.send_target(model.tip_in_base(near)[:3, 3])
+            k += 1
+            time.sleep(0.004)
+        behind = server.grid_behind()
+    finally:
+        commander.stop()
+        reader.stop()
+        server.stop()
+    ages = [now - t for now, t in got if now > t0 + 3.0]
+    assert ages and max(ages) < 0.5, max(ages)            # sample times on real time
+    assert behind < 0.2, behind
+    assert server.missed > 100                            # the overload is visible, counted
+    assert server.accepted > 100                         # set-points still executed
+
+
 def test_slow_consumer_bounded_queue_and_link_kept():
     # a consumer 5x slower than the stream for 2.5 s (> ping_interval + ping_timeout used to be
     # enough to drop the link behind the queued states): the link stays up, the oldest states are

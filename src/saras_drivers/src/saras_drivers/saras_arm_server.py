@@ -7,8 +7,12 @@ python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
   internal integration rate) and emits one ``state`` event per sample to each subscribed client;
   after a late wake-up it emits the samples it missed (up to ``max_catch_up`` periods), so the
   stream keeps its rate and exact sample times on a loaded host, delivered in a short burst;
-* every command first integrates the model up to its arrival time, so a command takes effect at
-  the instant it arrived, not at the next tick;
+* every command first emits the samples owed and integrates the model up to the instant it is
+  handled, then takes effect there, not at the next tick;
+* the sample grid is re-anchored against the time taken *inside* the emission lock: a caller's
+  time taken before waiting for the lock could be seconds old behind a queue of command tasks,
+  and the grid then fell behind real time without bound (measured 19 s after 40 s in a 2-core
+  platform demo, with only ~100 samples/s counted as missed);
 * event handlers validate payloads with :mod:`saras_arm_protocol` and answer with an ack; a rejected
   command also gets an ``error`` event and changes nothing. They run as asyncio tasks (FIFO, so in
   the order sent);
@@ -106,8 +110,7 @@ class SarasArmServer(object):
             self.subscribers.discard(sid)
             self._flow.pop(sid, None)
             if sid == self.commander:
-                now = time.monotonic()
-                await self._sample_until(now)
+                now = await self._sample_until()
                 self.advance(now)
                 self.model.hold()
                 self.commander = None
@@ -118,8 +121,7 @@ class SarasArmServer(object):
             cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
             # first the state samples a late loop still owes (so they are not overtaken by the
             # command), then the command acts now: no await between advance() and fn()
-            now = time.monotonic()
-            await self._sample_until(now)
+            now = await self._sample_until()
             try:
                 self.advance(now)           # (a no-op if the loop already sampled past now)
                 extra = fn(payload)
@@ -213,6 +215,10 @@ class SarasArmServer(object):
         return proto.make_state(self.state_seq, self._sample_time, m.q, self._fk[0], self._fk[1],
                                 self._fk[2], m.moving, m.max_velocity, m.target_id)
 
+    def grid_behind(self):
+        """[s] how far the state grid (next sample instant) is behind now (<= 0: on time)."""
+        return time.monotonic() - self._deadline
+
     # ------------------------------------------------------------------ loop
     def advance(self, until=None):
         """Integrate the model up to ``until`` (monotonic time, default now) in sub-steps of at
@@ -233,14 +239,15 @@ class SarasArmServer(object):
             return False
         return sock is not None and sock.queue.qsize() >= self.max_backlog
 
-    async def _sample_until(self, now):
-        """Emit every sample of the ``state_rate`` grid up to ``now``, each integrated to its own
-        instant and stamped with it. After a late wake-up (loaded host) the missed samples go out
+    async def _sample_until(self):
+        """Emit every sample of the ``state_rate`` grid up to now (taken once the emission lock is
+        held) and return that time; each sample is integrated to its own instant and stamped with it. After a late wake-up (loaded host) the missed samples go out
         in a burst, as a robot controller on its own CPU would have sampled them; beyond
         ``max_catch_up`` periods the grid is re-anchored (those samples are lost, counted in
         ``missed``). Called by the control loop and before every command, so a command never
         overtakes samples owed before it and sample times always increase."""
         async with self._emit_lock:
+            now = time.monotonic()
             period = self._period
             if now - self._deadline > self.max_catch_up * period:
                 lost = int((now - self._deadline) / period)
@@ -259,6 +266,7 @@ class SarasArmServer(object):
                             flow[1] += 1
                         await self.sio.emit(proto.EV_STATE, state, to=sid)
                 self._deadline += period
+        return now
 
     async def _control(self):
         """Wake at the state rate and emit the samples that are due."""
@@ -267,9 +275,8 @@ class SarasArmServer(object):
             delay = self._deadline - time.monotonic()
             if delay > 0:
                 await asyncio.sleep(delay)
-            now = time.monotonic()
-            self.max_late = max(self.max_late, now - self._deadline)
-            await self._sample_until(now)
+            self.max_late = max(self.max_late, time.monotonic() - self._deadline)
+            await self._sample_until()
 
     async def serve(self):
         self._stop = asyncio.Event()
