@@ -49,3 +49,14 @@ def test_flow_control_payloads():
     for bad in (None, {}, {'received': -3}, {'received': 1.0}, {'received': None}, [1]):
         with pytest.raises(proto.ProtocolError):
             proto.parse_state_ack(bad)
+
+
+def test_set_target_time():
+    p = proto.make_set_target(1, (0, 0, 0), t=123.5)
+    assert proto.target_time(p) == 123.5 and proto.parse_set_target(p)[0] == 1
+    assert proto.target_time(proto.make_set_target(1, (0, 0, 0))) is None
+    for bad in ('x', float('nan'), True, [1.0]):
+        p = proto.make_set_target(1, (0, 0, 0))
+        p['time'] = bad
+        with pytest.raises(proto.ProtocolError):
+            proto.parse_set_target(p)

@@ -183,8 +183,9 @@ def test_overloaded_server_grid_stays_on_real_time():
     # grid and so the sample times stay on real time. The grid used to be re-anchored on times
     # taken before waiting for the emission lock, which got older behind the queued commands:
     # sample times trailed real time by seconds (19 s in a platform demo) with few samples
-    # counted as missed.
-    model, server, port = _stream(state_rate=300.0)
+    # counted as missed. The set-points that waited longer than max_target_age (0.1 s) in the
+    # simulator's input are not executed (counted), the others are.
+    model, server, port = _stream(state_rate=300.0, max_target_age=0.1)
     emit = server.sio.emit
 
     async def slow_emit(*args, **kwargs):
@@ -218,6 +219,8 @@ def test_overloaded_server_grid_stays_on_real_time():
     assert behind < 0.2, behind
     assert server.missed > 100                            # the overload is visible, counted
     assert server.accepted > 100                         # set-points still executed
+    assert server.stale_targets > 100                    # ... the old ones not
+    assert server.accepted + server.stale_targets <= k
 
 
 def test_slow_consumer_bounded_queue_and_link_kept():

@@ -285,4 +285,5 @@ class SarasArmClient(object):
         return r
 
     def send_target(self, position, orientation=None):
-        return self.emit(proto.EV_SET_TARGET, proto.make_set_target(self.next_id(), position, orientation))
+        return self.emit(proto.EV_SET_TARGET,
+                         proto.make_set_target(self.next_id(), position, orientation, time.time()))

@@ -12,7 +12,9 @@ Client -> server events (the server answers every one with a Socket.IO acknowled
 ``{"ok": bool, "code": str, "message": str, "id": int}``; a rejected command also triggers an
 ``error`` event so that fire-and-forget clients see it):
 
-``set_target``       ``{"id": int, "position": [x, y, z], "orientation": [x, y, z, w] | null}``
+``set_target``       ``{"id": int, "position": [x, y, z], "orientation": [x, y, z, w] | null,
+                     "time": float}`` (``time``, optional: sender wall clock [s]; a server with
+                     ``max_target_age`` drops targets older than that, counted, no answer)
 ``set_max_velocity`` ``{"id": int, "max_velocity": float}``      [rad/s]; insertion moves at
                      max_velocity * insertion_ratio [m/s] (ratio published in ``info``)
 ``set_clip``         ``{"id": int, "jaw": float | null, "roll": float | null}``   [rad], null = keep
@@ -54,7 +56,8 @@ BAD_PAYLOAD = 'bad_payload'          # missing field, wrong type, wrong length, 
 RCM_VIOLATION = 'rcm_violation'      # target not reachable by pivoting through the RCM
 WORKSPACE = 'workspace'              # pivot angles / insertion / clip beyond joint limits
 BAD_VALUE = 'bad_value'              # e.g. max velocity <= 0 or above the hardware limit
-CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE)
+STALE = 'stale'                      # set_target older than the server's max_target_age
+CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE)
 
 
 class ProtocolError(ValueError):
@@ -110,11 +113,18 @@ def _dict(payload):
     return payload
 
 
-def make_set_target(cmd_id, position, orientation=None):
+def make_set_target(cmd_id, position, orientation=None, t=None):
     d = {'id': int(cmd_id), 'position': [float(x) for x in position], 'orientation': None}
     if orientation is not None:
         d['orientation'] = [float(x) for x in orientation]
+    if t is not None:
+        d['time'] = float(t)
     return d
+
+
+def target_time(payload):
+    """The optional ``time`` of a ``set_target`` [s, sender wall clock], or None."""
+    return _scalar(_dict(payload), 'time', optional=True)
 
 
 def parse_set_target(payload):
@@ -122,6 +132,7 @@ def parse_set_target(payload):
     p = _dict(payload)
     cmd_id = _id(p)
     pos = _vector(p, 'position', 3)
+    _scalar(p, 'time', optional=True)          # validated here; read with target_time()
     q = _vector(p, 'orientation', 4, optional=True)
     if q is not None:
         n = math.sqrt(sum(x * x for x in q))

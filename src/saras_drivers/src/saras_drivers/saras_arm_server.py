@@ -45,7 +45,7 @@ class SarasArmServer(object):
 
     def __init__(self, model, host='127.0.0.1', port=5000, rate=1000.0, state_rate=250.0,
                  logger=None, ping_interval=1.0, ping_timeout=5.0, max_backlog=32,
-                 max_catch_up=30):
+                 max_catch_up=30, max_target_age=0.0):
         if not rate >= 500.0:
             raise ValueError('rate must be >= 500 Hz, got %r' % rate)
         if not 0.0 < state_rate <= rate:
@@ -60,6 +60,10 @@ class SarasArmServer(object):
         self.state_rate = float(state_rate)
         self.max_backlog = int(max_backlog)
         self.max_catch_up = int(max_catch_up)
+        if not max_target_age >= 0.0:
+            raise ValueError('max_target_age must be >= 0 s (0 = no limit), got %r' % max_target_age)
+        self.max_target_age = float(max_target_age)
+        self.stale_targets = 0       # set_target commands older than max_target_age when handled
         self.log = logger or logging.getLogger('saras_arm_server')
         # Engine.IO heartbeat: a client that does not answer a ping (sent every ping_interval [s])
         # within ping_timeout [s] is dropped; a client sees a dead server after the same sum.
@@ -121,6 +125,13 @@ class SarasArmServer(object):
             cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
             # first the state samples a late loop still owes (so they are not overtaken by the
             # command), then the command acts now: no await between advance() and fn()
+            if fn is set_target and stale(payload):
+                # a set-point that waited in our input longer than the limit is not executed (a
+                # simulator starved of CPU would otherwise replay seconds-old motion), and costs
+                # almost nothing, so that a backlog drains; counted, no error event: the client
+                # cannot act on it and it would add load
+                self.stale_targets += 1
+                return proto.reply(False, proto.STALE, 'target older than %.3f s' % self.max_target_age, cmd_id)
             now = await self._sample_until()
             try:
                 self.advance(now)           # (a no-op if the loop already sampled past now)
@@ -144,6 +155,16 @@ class SarasArmServer(object):
         def set_target(payload):
             cmd_id, pos, q = proto.parse_set_target(payload)
             self.model.set_target(pos, q, cmd_id)
+
+        def stale(payload):
+            """True for a set_target older than max_target_age (sender time vs our wall clock)."""
+            if self.max_target_age <= 0.0:
+                return False
+            try:
+                t = proto.target_time(payload)
+            except proto.ProtocolError:
+                return False                 # parse_set_target reports it
+            return t is not None and time.time() - t > self.max_target_age
 
         def set_max_velocity(payload):
             _, v = proto.parse_set_max_velocity(payload)
