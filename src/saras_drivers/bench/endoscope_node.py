@@ -4,13 +4,18 @@
 For each case (resolution, fps, ECM moving or still) it starts a private roscore, dvrk_sim with
 ``publish_tf`` (world -> ECM -> optical frames, the four tool frames; ``ecm/dwell`` 0 = the ECM
 moves all the time, 1e6 = still) and ``endoscope.launch width height fps``, subscribes (AnyMsg:
-no deserialisation in the benchmark) to left/right ``image_raw`` and ``image_raw/compressed`` as
-a viewer + recorder would, and after ``--warmup`` s measures for ``--duration`` s the message
-rate of each of the 4 topics and the CPU of the endoscope_sim process (% of one core, /proc).
+no deserialisation in the benchmark) as ``--consumer`` says, and after ``--warmup`` s measures
+for ``--duration`` s the message rate of each topic and the CPU of the endoscope_sim process
+(% of one core, /proc). Consumers: ``viewer`` (default) = left/right ``image_raw`` and
+``image_raw/compressed`` over TCP, as a separate viewer + recorder would (2 x 2.7 MB per frame
+at 720p serialised, sent and read by this Python process, which competes for the same cores);
+``recorder`` = ``image_raw/compressed`` and ``camera_info`` only, as in the platform, where the
+raw images go zero-copy to the overlay nodelet in the same manager and the recorder takes the
+compressed stream.
 Each case runs for every renderer of ``--renderers`` (endoscope.launch ``renderer``: cpp = the
 compiled nodelet in endoscope_sim_node, python = the rospy endoscope_sim), in the same run.
 Usage: endoscope_node.py [--duration S] [--warmup S] [--cases 720p30m,1080p30m,...] [--raw-only]
-                         [--renderers cpp,python]
+                         [--renderers cpp,python] [--consumer viewer|recorder]
 Case names: <height>p<fps><m|s> (m = ECM moving, s = still). Needs the workspace built
 (scripts/env.sh: saras_drivers, saras_msgs; saras_collision for the bone boxes).
 """
@@ -88,9 +93,13 @@ def run_case(height, fps, moving, renderer, args):
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         rospy.init_node('endoscope_node_bench', anonymous=True, disable_signals=True)
         counts = {}
-        topics = ['/endoscope/%s/image_raw' % e for e in ('left', 'right')]
-        if not args.raw_only:
-            topics += ['/endoscope/%s/image_raw/compressed' % e for e in ('left', 'right')]
+        if args.consumer == 'recorder':
+            topics = ['/endoscope/%s/%s' % (e, t) for t in ('image_raw/compressed', 'camera_info')
+                      for e in ('left', 'right')]
+        else:
+            topics = ['/endoscope/%s/image_raw' % e for e in ('left', 'right')]
+            if not args.raw_only:
+                topics += ['/endoscope/%s/image_raw/compressed' % e for e in ('left', 'right')]
 
         def cb(_msg, t):
             counts[t] = counts.get(t, 0) + 1
@@ -133,7 +142,9 @@ def main():
     ap.add_argument('--warmup', type=float, default=3.0)
     ap.add_argument('--cases', default='720p30m,720p30s,1080p30m,1080p30s,720p60m,720p60s,1080p60m,1080p60s')
     ap.add_argument('--renderers', default='cpp,python')
-    ap.add_argument('--raw-only', action='store_true', help='no compressed subscribers')
+    ap.add_argument('--raw-only', action='store_true', help='no compressed subscribers (viewer)')
+    ap.add_argument('--consumer', choices=('viewer', 'recorder'), default='viewer',
+                    help='viewer: raw + compressed over TCP; recorder: compressed + camera_info only')
     args = ap.parse_args()
     rows = []
     for c, renderer in [(c, rd) for c in args.cases.split(',') for rd in args.renderers.split(',')]:
@@ -162,8 +173,11 @@ def main():
         rates, cpu, l0, l1 = eval(data.decode(), {'nan': float('nan'), 'inf': float('inf')})  # our own repr
         rows.append((c, renderer, SIZES[height], fps, moving, rates, cpu, l0, l1))
         print('done %s %s' % (c, renderer), file=sys.stderr)
-    print('\n| renderer | case | ECM | target fps | image_raw L / R [Hz] | compressed L / R [Hz] | '
-          'endoscope_sim CPU [% of one core] | CPU per stereo frame [ms] | load avg before -> after |')
+    recorder = args.consumer == 'recorder'
+    first, second = ('compressed', 'camera_info') if recorder else ('image_raw', 'compressed')
+    print('\n| renderer | case | ECM | target fps | %s L / R [Hz] | %s L / R [Hz] | '
+          'endoscope_sim CPU [%% of one core] | CPU per stereo frame [ms] | load avg before -> after |'
+          % (first, second))
     print('|---|---|---|---|---|---|---|---|---|')
     for c, renderer, (w, h), fps, moving, rates, cpu, l0, l1 in rows:
         comp = '%.1f / %.1f' % (rates[2], rates[3]) if len(rates) > 2 else '-'
@@ -171,10 +185,11 @@ def main():
         print('| %s | %dx%d | %s | %g | %.1f / %.1f | %s | %.0f | %.1f | %.2f -> %.2f |' % (
             renderer, w, h, 'moving' if moving else 'still', fps, rates[0], rates[1], comp, cpu,
             per_frame, l0, l1))
-    print('\n%d s windows after %g s warm-up; subscribers take image_raw and compressed of both '
-          'eyes (AnyMsg)%s. CPU per stereo frame = node CPU time / left image_raw count (includes '
-          'rendering, JPEG, publishing and the TF listener); the rate is CPU-bound when the '
-          'host is loaded.' % (args.duration, args.warmup, ' (raw only)' if args.raw_only else ''))
+    what = ('compressed and camera_info of both eyes (no raw subscriber: the recorder\'s view)' if recorder
+            else 'image_raw and compressed of both eyes%s' % (' (raw only)' if args.raw_only else ''))
+    print('\n%d s windows after %g s warm-up; subscribers (AnyMsg) take %s. CPU per stereo frame = '
+          'node CPU time / left %s count (includes rendering, JPEG, publishing and the TF listener); '
+          'the rate is CPU-bound when the host is loaded.' % (args.duration, args.warmup, what, first))
 
 
 if __name__ == '__main__':
