@@ -44,7 +44,9 @@ def _vector(values, length, what):
     if q.size < length:
         raise ValueError('%s: expected %d joint values, got %d' % (what, length, q.size))
     q = q[:length]
-    if not np.all(np.isfinite(q)):
+    # math.isfinite over the few floats: 0.5 us instead of 2.9 us for np.all(np.isfinite(q)),
+    # whose reduction dispatch was ~7 % of a loaded SARAS arm simulator's active samples (py-spy)
+    if not all(map(math.isfinite, q.tolist())):
         raise ValueError('%s: non-finite joint value in %s' % (what, q))
     return q
 
