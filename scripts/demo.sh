@@ -46,6 +46,26 @@ stop_pid() {
   wait "$1" 2>/dev/null
 }
 
+# stop_recorder PID: SIGINT; the recorder then unsubscribes and writes what it has queued (up to
+# buffer_mb of recording.yaml). On an overloaded host that takes longer than stop_pid's 20 s (measured:
+# a 1 kHz + 720p demo on 2 cores, recorder killed, 9.7 s of 30 s left in the bag), so it gets time
+# as long as its bag keeps growing (no growth for RECORDER_STALL_S s, default 10: stop_pid's escalation).
+stop_recorder() {
+  local active="$OUT/platform.bag.active" last=-1 size still=0
+  kill -INT "$1" 2>/dev/null
+  while kill -0 "$1" 2>/dev/null; do
+    size=$(stat -c %s "$active" 2>/dev/null || echo 0)
+    if [ "$size" -ne "$last" ]; then last=$size; still=0; else still=$((still + 1)); fi
+    if [ "$still" -ge $(( ${RECORDER_STALL_S:-10} * 2 )) ]; then break; fi
+    sleep 0.5
+  done
+  if kill -0 "$1" 2>/dev/null; then
+    echo "demo: the recorder's bag stopped growing for ${RECORDER_STALL_S:-10} s while closing"
+    stop_pid "$1" "the recorder"
+  fi
+  wait "$1" 2>/dev/null
+}
+
 # Virtual display for rviz (software GL); the screenshot shows what a user would see.
 display_num=$(( 90 + RANDOM % 100 ))
 Xvfb ":$display_num" -screen 0 1600x1000x24 -nolisten tcp >"$OUT/xvfb.log" 2>&1 &
@@ -110,7 +130,7 @@ done
 # The recording lasts DURATION s; the snapshot (whose start-up takes 5-15 s on a loaded 2-core
 # host) may finish after it, while the platform still runs.
 echo "demo: stopping the recording"
-stop_pid "$record_pid" "the recorder"
+stop_recorder "$record_pid"
 [ -n "${snap_pid:-}" ] && wait "$snap_pid"
 colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
 echo "demo: visual feedback: $colours"
