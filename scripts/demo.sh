@@ -33,35 +33,25 @@ cleanup() {
   for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
 }
 trap cleanup EXIT
-# stop_pid PID NAME: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and SIGKILL to
-# it and its children (a killed roslaunch would leave its nodes running).
+# stop_pid PID NAME [FILE]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and
+# SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILE, the
+# 20 s count restarts whenever FILE grows: the recorder, after SIGINT, writes what it has queued
+# (up to buffer_mb of recording.yaml), which on an overloaded host takes longer than 20 s (measured:
+# a 1 kHz + 720p demo on 2 cores, recorder killed, 9.7 s of 30 s left in the bag).
 stop_pid() {
+  local last=-1 size t=0
   kill -INT "$1" 2>/dev/null
-  for ((t = 0; t < 40; t++)); do kill -0 "$1" 2>/dev/null || break; sleep 0.5; done
+  while [ "$t" -lt 40 ] && kill -0 "$1" 2>/dev/null; do
+    if [ -n "${3:-}" ]; then
+      size=$(stat -c %s "$3" 2>/dev/null || echo 0)
+      if [ "$size" -ne "$last" ]; then last=$size; t=0; fi
+    fi
+    sleep 0.5; t=$((t + 1))
+  done
   if kill -0 "$1" 2>/dev/null; then
     echo "demo: $2 did not stop, terminating it and its children"
     pkill -TERM -P "$1" 2>/dev/null; kill -TERM "$1" 2>/dev/null; sleep 2
     pkill -KILL -P "$1" 2>/dev/null; kill -KILL "$1" 2>/dev/null
-  fi
-  wait "$1" 2>/dev/null
-}
-
-# stop_recorder PID: SIGINT; the recorder then unsubscribes and writes what it has queued (up to
-# buffer_mb of recording.yaml). On an overloaded host that takes longer than stop_pid's 20 s (measured:
-# a 1 kHz + 720p demo on 2 cores, recorder killed, 9.7 s of 30 s left in the bag), so it gets time
-# as long as its bag keeps growing (no growth for RECORDER_STALL_S s, default 10: stop_pid's escalation).
-stop_recorder() {
-  local active="$OUT/platform.bag.active" last=-1 size still=0
-  kill -INT "$1" 2>/dev/null
-  while kill -0 "$1" 2>/dev/null; do
-    size=$(stat -c %s "$active" 2>/dev/null || echo 0)
-    if [ "$size" -ne "$last" ]; then last=$size; still=0; else still=$((still + 1)); fi
-    if [ "$still" -ge $(( ${RECORDER_STALL_S:-10} * 2 )) ]; then break; fi
-    sleep 0.5
-  done
-  if kill -0 "$1" 2>/dev/null; then
-    echo "demo: the recorder's bag stopped growing for ${RECORDER_STALL_S:-10} s while closing"
-    stop_pid "$1" "the recorder"
   fi
   wait "$1" 2>/dev/null
 }
@@ -130,7 +120,7 @@ done
 # The recording lasts DURATION s; the snapshot (whose start-up takes 5-15 s on a loaded 2-core
 # host) may finish after it, while the platform still runs.
 echo "demo: stopping the recording"
-stop_recorder "$record_pid"
+stop_pid "$record_pid" "the recorder" "$OUT/platform.bag.active"
 [ -n "${snap_pid:-}" ] && wait "$snap_pid"
 colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
 echo "demo: visual feedback: $colours"
