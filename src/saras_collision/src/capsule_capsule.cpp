@@ -13,6 +13,13 @@ using namespace detail;  // NOLINT(build/namespaces): this library's own private
 
 namespace
 {
+/// Bound on a + e + |v|^2 + r1 + r2 of the fast path [m^2 + m]: keeps every product below 2^990.
+constexpr double kFastRange = 0x1p240;
+/// sin^2 of the angle between the axes above which a e - b^2 does not cancel (fast path).
+constexpr double kNonParallel = 1e-3;
+/// |v|^2 above which the fast path takes the normal from v (1 / |v|^2 finite) [m^2].
+constexpr double kMinFastAxis2 = 1e-290;
+
 /**
  * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
  * front of the computation): the inputs are finite and the radii >= 0 iff the computed
@@ -127,13 +134,25 @@ SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::V
  * outputs anyway) and v = q1 - q2, so that the distance is |v| - r1 - r2 without a rescaling
  * (fewer instructions than forming M v from the numerators; the division overlaps the clamps);
  * 1 / |v| = sqrt(|v|^2) / |v|^2, the division overlapping the square root. M is a normal
- * number (a, e > 1e-30, D > 1e-3 a e). Inputs are validated by the guard alone: a non-finite
- * coordinate makes a or e, hence M, non-finite; a NaN or infinite radius makes r1 + r2 so.
+ * number (a, e > 1e-30, D > 1e-3 a e).
+ * Inputs are validated by the guard alone, after the computation (off the critical path):
+ *  - range: a + e + |v|^2 + r1 + r2 < 2^240 bounds |d1|, |d2|, |v| by 2^120 and, since
+ *    w = v - s d1 + t d2 with s, t in [0, 1] (they come out of clamps whatever happened
+ *    before), |w| < 2^122. Then every product above is below 2^990: no overflow, so no clamp
+ *    turned an infinity into a bound and no inf - inf made a NaN that a clamp hid;
+ *  - finiteness: a NaN or infinite coordinate of p1 or p2 makes a (through d1) non-finite, of
+ *    p3 or p4 makes e so; a NaN or +inf radius makes r1 + r2 so; all fail the range test
+ *    (false on NaN). A radius of -inf fails the radius test;
+ *  - margins: both axes longer than 1e-15 m, sin^2 of their angle above 1e-3, closest axis
+ *    points apart (|v|^2 > 1e-290, so that 1 / |v|^2 is finite): one minimum, which needs no
+ *    NaN handling since NaN inputs already failed the range test;
+ *  - radii >= 0 (+0 and -0 included).
+ * Lengths beyond ~1e36 m fail the range test and go to capsulePairAnyScale(), which scales.
  * @return false (outputs untouched) when the case is not general, an input is not finite, a
- *         radius is negative or not finite, or a product overflows or underflows (every
- *         comparison below is false on NaN); capsulePair() (through capsulePairAnyScale())
- *         then handles it and reports the invalid inputs. True: the outputs are valid and
- *         finite (so the caller needs no further input check).
+ *         radius is negative or not finite, or the magnitudes are outside the range above;
+ *         capsulePair() (through capsulePairAnyScale()) then handles it and reports the
+ *         invalid inputs. True: the outputs are valid and finite (so the caller needs no
+ *         further input check).
  */
 SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r1,
                                             const Eigen::Vector3d& p3, const Eigen::Vector3d& p4, double r2,
@@ -142,7 +161,6 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
 {
   // Scalar code: GCC -O2 emits fewer instructions for it than for the Eigen 3-vector
   // expressions (and this file is compiled without SLP vectorisation, see CMakeLists.txt).
-  constexpr double kInf = std::numeric_limits<double>::infinity();
   const double p1x = p1[0], p1y = p1[1], p1z = p1[2], p3x = p3[0], p3y = p3[1], p3z = p3[2];
   const double d1x = p2[0] - p1x, d1y = p2[1] - p1y, d1z = p2[2] - p1z;
   const double d2x = p4[0] - p3x, d2y = p4[1] - p3y, d2z = p4[2] - p3z;
@@ -171,11 +189,10 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
   const double vx = q1x - q2x, vy = q1y - q2y, vz = q1z - q2z;
   const double v2 = vx * vx + vy * vy + vz * vz;
   const double rr = r1 + r2;
-  // One predictable branch for every special case (each test is false on NaN; sn, tn, sv
-  // finite: no product overflowed, so no clamp above turned an overflow into a number; the
-  // sum also rejects an infinite M, |v|^2 or radius; a NaN radius makes r1 + r2 NaN).
-  if (!((minD(a, e) > kDegenerateLength2) & (denom > 1e-3 * ae) & (minD(r1, r2) >= 0.0) &
-        (((std::abs(sn) + std::abs(tn)) + (std::abs(sv) + m)) + (v2 + rr) < kInf) & (v2 > 1e-290)))
+  // Three predictable branches for every special case (each test is false on NaN; see the
+  // proof above): range and finiteness, the general-case margins, the radii.
+  const double margin = minD(minD(minD(a, e) - kDegenerateLength2, denom - kNonParallel * ae), v2 - kMinFastAxis2);
+  if (!((a + e) + (v2 + rr) < kFastRange) || !(margin > 0.0) || !(minD(r1, r2) >= 0.0))
     return false;
   const double len = std::sqrt(v2);
   const double inv_v2 = 1.0 / v2;  // overlaps the square root, as do the next products

@@ -482,7 +482,7 @@ TEST(CapsuleCapsule, EveryClampingRegionClosedForm)
 // The general-case path requires its products (a e |d1 x d2|^2 and the scaled axis difference
 // squared) to be normal numbers and falls back to the careful path otherwise, which rescales
 // inputs beyond 2^200 m by a power of two: the result is the same, scaled, from 1e-12 to
-// 1e300 (the general path runs up to ~1e25, the careful one above, rescaled above 1.6e60),
+// 1e300 (the general path runs up to ~1e35, the careful one above, rescaled above 1.6e60),
 // and a distance that is not representable is kInvalidInput, never a wrong number.
 TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
 {
@@ -535,6 +535,45 @@ TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
                                                      b),
             saras_collision::kInvalidInput);
   EXPECT_TRUE(std::isnan(d));
+}
+
+// The general-case path takes a + e + |v|^2 + r1 + r2 < 2^240 as its range (no product can
+// overflow below it) and hands larger inputs to the careful path: the same answer, scaled, on
+// both sides of the bound (scaling by a power of two is exact), for both entry points.
+TEST(CapsuleCapsule, SameAnswerOnBothSidesOfTheFastPathRangeBound)
+{
+  Random rnd;
+  int checked = 0;
+  for (int k = 0; k < 200; ++k)
+  {
+    Vector3d p1, p2, p3, p4;
+    rnd.segment(p1, p2, 0.5);
+    rnd.segment(p3, p4, 0.5);
+    p2 = p1 + (p2 - p1) * rnd.uniform(1.0, 20.0);  // up to 2.4 long, up to ~1.7 apart
+    const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    double d;
+    Vector3d a, b;
+    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
+    ASSERT_NEAR(d, segmentSegmentRef(p1, p2, p3, p4) - r1 - r2, 1e-12) << k;
+    for (int e = 105; e <= 135; ++e)  // the bound is crossed between 2^118 and 2^130 for these sizes
+    {
+      const double scale = std::ldexp(1.0, e);
+      double ds;
+      Vector3d as, bs;
+      const int code_s = saras_collision::dist_capsule_to_capsule(p1 * scale, p2 * scale, p3 * scale, p4 * scale,
+                                                                  r1 * scale, r2 * scale, ds, as, bs);
+      const saras_collision::DistanceResult full =
+          saras_collision::capsuleCapsule(p1 * scale, p2 * scale, r1 * scale, p3 * scale, p4 * scale, r2 * scale);
+      ASSERT_EQ(code_s, code) << k << " 2^" << e;
+      ASSERT_EQ(full.code, code) << k << " 2^" << e;
+      ASSERT_EQ(full.distance, ds) << k << " 2^" << e;
+      ASSERT_NEAR(ds / scale, d, 1e-14) << k << " 2^" << e;
+      ASSERT_LE((as / scale - a).norm(), 1e-14) << k << " 2^" << e;
+      ASSERT_LE((bs / scale - b).norm(), 1e-14) << k << " 2^" << e;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 200 * 31);
 }
 
 // ===================================================================== boxes
@@ -651,8 +690,10 @@ TEST(CapsuleBox, ClosedFormCases)
   EXPECT_NEAR(a.z(), 3.3, 1e-15);
   EXPECT_NEAR(b.z(), 3.0, 1e-15);
   EXPECT_NEAR(a.x(), b.x(), 1e-15);
-  EXPECT_GE(b.x(), 0.0);
-  EXPECT_LE(b.x(), 1.0);
+  // On the face up to rounding: code built whole for x86-64-v3 (saras_collision_test_geometry_v3)
+  // fuses the box-frame transforms into multiply-adds and puts b 5.6e-17 outside x = 0.
+  EXPECT_GE(b.x(), -1e-15);
+  EXPECT_LE(b.x(), 1.0 + 1e-15);
   // Skew over an edge: axis from (2, -1, 4) to (2, 3, 4) passes over the edge x=1, z=3.
   EXPECT_EQ(saras_collision::dist_capsule_to_parallelepiped(Vector3d(2, -1, 4), Vector3d(2, 3, 4), v, 0.0, d, a, b),
             saras_collision::kSeparated);
