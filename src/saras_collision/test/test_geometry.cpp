@@ -247,6 +247,47 @@ TEST(CapsuleCapsule, CrossingAxesSeparatedTangentIntersecting)
   EXPECT_TRUE(b.isApprox(Vector3d(0, 0, 0.3), 1e-15));
 }
 
+// The general-case path switches its witness points (axis points when intersecting, surface
+// points otherwise) and its code at distance -1e-9 / +1e-9 exactly: crossing perpendicular axes
+// whose closest points and distance are exact (s = t = 1/2, |v| = h, Sterbenz subtraction),
+// on each switch and one ulp on either side, through both entry points and both argument orders.
+TEST(CapsuleCapsule, WitnessPointsAndCodeSwitchAtTheTangentBand)
+{
+  const double tol = saras_collision::kTangentTolerance;
+  auto check = [](double h, double r, int expected_code, double expected_distance, int line) {
+    for (int swapped = 0; swapped < 2; ++swapped)
+    {
+      const Vector3d p1(-1, 0, 0), p2(1, 0, 0), p3(0, -1, h), p4(0, 1, h);
+      double d;
+      Vector3d a, b;
+      const int code = swapped ? saras_collision::dist_capsule_to_capsule(p3, p4, p1, p2, r, r, d, b, a) :
+                                 saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r, r, d, a, b);
+      const saras_collision::DistanceResult full = swapped ? saras_collision::capsuleCapsule(p3, p4, r, p1, p2, r) :
+                                                             saras_collision::capsuleCapsule(p1, p2, r, p3, p4, r);
+      EXPECT_EQ(code, expected_code) << "line " << line << " swapped " << swapped;
+      EXPECT_EQ(full.code, expected_code) << "line " << line;
+      EXPECT_EQ(d, expected_distance) << "line " << line;
+      EXPECT_EQ(full.distance, expected_distance) << "line " << line;
+      // Intersecting: the closest points of the axes; otherwise the surface points.
+      const double k = expected_code == saras_collision::kIntersecting ? 0.0 : r;
+      EXPECT_LE((a - Vector3d(0, 0, k)).norm(), 1e-24) << "line " << line << ": " << a.transpose();
+      EXPECT_LE((b - Vector3d(0, 0, h - k)).norm(), 1e-24) << "line " << line << ": " << b.transpose();
+    }
+  };
+  // +1e-9: zero radii, distance = h exactly.
+  check(tol, 0.0, saras_collision::kTangent, tol, __LINE__);
+  check(std::nextafter(tol, 1.0), 0.0, saras_collision::kSeparated, std::nextafter(tol, 1.0), __LINE__);
+  check(std::nextafter(tol, 0.0), 0.0, saras_collision::kTangent, std::nextafter(tol, 0.0), __LINE__);
+  // -1e-9: r1 + r2 = 2^-29, h = 2^-29 - 1e-9 (exact), distance = h - 2^-29 exactly.
+  const double r = std::ldexp(1.0, -30), h = std::ldexp(1.0, -29) - tol;
+  ASSERT_EQ(h - 2 * r, -tol);
+  check(h, r, saras_collision::kTangent, -tol, __LINE__);
+  check(std::nextafter(h, 1.0), r, saras_collision::kTangent, std::nextafter(h, 1.0) - 2 * r, __LINE__);
+  check(std::nextafter(h, 0.0), r, saras_collision::kIntersecting, std::nextafter(h, 0.0) - 2 * r, __LINE__);
+  // Zero distance of either sign is tangent.
+  check(0.0, 0.0, saras_collision::kTangent, 0.0, __LINE__);
+}
+
 TEST(CapsuleCapsule, ParallelOverlappingGivesValidPoints)
 {
   double d;
