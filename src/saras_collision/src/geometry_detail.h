@@ -82,7 +82,7 @@ inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
 inline double minD(double a, double b)
 {
 #if defined(SARAS_COLLISION_VEX_ASM)
-  __asm__("%vminsd %1, %d0" : "+v"(a) : "v"(b));  // a < b ? a : b; VEX-encoded in the AVX clone
+  __asm__("%vminsd %1, %d0" : "+v"(a) : "v"(b));  // a < b ? a : b; VEX / EVEX in the AVX clones
   return a;
 #elif defined(__SSE2__) && defined(__GNUC__)
   __asm__("minsd %1, %0" : "+x"(a) : "x"(b));  // a < b ? a : b, no zeroing of the upper lane
