@@ -520,6 +520,24 @@ TEST(CapsuleCapsule, EveryClampingRegionClosedForm)
   }
 }
 
+/// dist_capsule_to_capsule() of the pair scaled by @p scale, with the distance and points
+/// scaled back into @p d, @p a, @p b; expects capsuleCapsule() to give the same code and
+/// distance bit for bit. @return the code
+int scaledAnswer(const Vector3d& p1, const Vector3d& p2, const Vector3d& p3, const Vector3d& p4, double r1, double r2,
+                 double scale, double& d, Vector3d& a, Vector3d& b)
+{
+  const int code = saras_collision::dist_capsule_to_capsule(p1 * scale, p2 * scale, p3 * scale, p4 * scale, r1 * scale,
+                                                            r2 * scale, d, a, b);
+  const saras_collision::DistanceResult full =
+      saras_collision::capsuleCapsule(p1 * scale, p2 * scale, r1 * scale, p3 * scale, p4 * scale, r2 * scale);
+  EXPECT_EQ(full.code, code) << "scale " << scale;
+  EXPECT_EQ(full.distance, d) << "scale " << scale;
+  d /= scale;
+  a /= scale;
+  b /= scale;
+  return code;
+}
+
 // The general-case path requires its products (a e |d1 x d2|^2 and the scaled axis difference
 // squared) to be normal numbers and falls back to the careful path otherwise, which rescales
 // inputs beyond 2^200 m by a power of two: the result is the same, scaled, from 1e-12 to
@@ -545,20 +563,15 @@ TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
     {
       double ds;
       Vector3d as, bs;
-      const int code_s = saras_collision::dist_capsule_to_capsule(p1 * scale, p2 * scale, p3 * scale, p4 * scale,
-                                                                  r1 * scale, r2 * scale, ds, as, bs);
-      const saras_collision::DistanceResult full =
-          saras_collision::capsuleCapsule(p1 * scale, p2 * scale, r1 * scale, p3 * scale, p4 * scale, r2 * scale);
+      const int code_s = scaledAnswer(p1, p2, p3, p4, r1, r2, scale, ds, as, bs);
       ASSERT_TRUE(saras_collision::isValidCode(code_s)) << k << " scale " << scale;
-      ASSERT_EQ(full.code, code_s) << k << " scale " << scale;
-      ASSERT_EQ(full.distance, ds) << k << " scale " << scale;
-      ASSERT_NEAR(ds / scale, d, 1e-13) << k << " scale " << scale;
+      ASSERT_NEAR(ds, d, 1e-13) << k << " scale " << scale;
       if (code != saras_collision::kIntersecting && code_s != saras_collision::kIntersecting)
       {
-        ASSERT_LE((as / scale - a).norm(), 1e-13) << k << " scale " << scale;
-        ASSERT_LE((bs / scale - b).norm(), 1e-13) << k << " scale " << scale;
+        ASSERT_LE((as - a).norm(), 1e-13) << k << " scale " << scale;
+        ASSERT_LE((bs - b).norm(), 1e-13) << k << " scale " << scale;
       }
-      if (std::abs(ds) > 1e-9 && std::abs(d) > 1e-9)  // codes away from the 1 nm tangent band
+      if (std::abs(ds * scale) > 1e-9 && std::abs(d) > 1e-9)  // codes away from the 1 nm tangent band
       {
         ASSERT_EQ(code_s == saras_collision::kIntersecting, code == saras_collision::kIntersecting) << k;
         ASSERT_EQ(code_s == saras_collision::kParallel, code == saras_collision::kParallel) << k;
@@ -601,16 +614,10 @@ TEST(CapsuleCapsule, SameAnswerOnBothSidesOfTheFastPathRangeBound)
       const double scale = std::ldexp(1.0, e);
       double ds;
       Vector3d as, bs;
-      const int code_s = saras_collision::dist_capsule_to_capsule(p1 * scale, p2 * scale, p3 * scale, p4 * scale,
-                                                                  r1 * scale, r2 * scale, ds, as, bs);
-      const saras_collision::DistanceResult full =
-          saras_collision::capsuleCapsule(p1 * scale, p2 * scale, r1 * scale, p3 * scale, p4 * scale, r2 * scale);
-      ASSERT_EQ(code_s, code) << k << " 2^" << e;
-      ASSERT_EQ(full.code, code) << k << " 2^" << e;
-      ASSERT_EQ(full.distance, ds) << k << " 2^" << e;
-      ASSERT_NEAR(ds / scale, d, 1e-14) << k << " 2^" << e;
-      ASSERT_LE((as / scale - a).norm(), 1e-14) << k << " 2^" << e;
-      ASSERT_LE((bs / scale - b).norm(), 1e-14) << k << " 2^" << e;
+      ASSERT_EQ(scaledAnswer(p1, p2, p3, p4, r1, r2, scale, ds, as, bs), code) << k << " 2^" << e;
+      ASSERT_NEAR(ds, d, 1e-14) << k << " 2^" << e;
+      ASSERT_LE((as - a).norm(), 1e-14) << k << " 2^" << e;
+      ASSERT_LE((bs - b).norm(), 1e-14) << k << " 2^" << e;
       ++checked;
     }
   }
