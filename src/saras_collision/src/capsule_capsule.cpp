@@ -5,8 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 
 namespace saras_collision
@@ -21,27 +19,6 @@ constexpr double kFastRange = 0x1p240;
 constexpr double kNonParallel = 1e-3;
 /// |v|^2 above which the fast path takes the normal from v (1 / |v|^2 finite) [m^2].
 constexpr double kMinFastAxis2 = 1e-290;
-
-/**
- * classify() of a finite @p distance by integer compares of its bit pattern (IEEE 754 binary64:
- * non-negative doubles order as their patterns read as signed integers, negative ones in
- * reverse order as unsigned integers), so distance > tol <=> bits > bits(tol) (signed) and
- * distance < -tol <=> bits > bits(-tol) (unsigned); +0.0 and -0.0 give kTangent. Same result as
- * classify() for every finite distance (gtest CapsuleCapsule.WitnessPointsAndCodeSwitchAtTheTangentBand
- * checks both switches to the ulp); fewer floating-point instructions (one move of the bits
- * instead of a constant and two compares), which the fast path's throughput depends on:
- * 15.6 -> 15.0 ns per query in the benchmark. Not for NaN (the fast path's results are finite).
- */
-inline int classifyFinite(double distance)
-{
-  static_assert(kTangentTolerance == 1e-9, "kToleranceBits must be the bit pattern of kTangentTolerance");
-  constexpr std::uint64_t kToleranceBits = 0x3e112e0be826d695;  // 1e-9
-  constexpr std::uint64_t kSignBit = std::uint64_t{ 1 } << 63;
-  std::uint64_t bits;
-  std::memcpy(&bits, &distance, sizeof bits);
-  return static_cast<int>(static_cast<std::int64_t>(bits) > static_cast<std::int64_t>(kToleranceBits)) -
-         static_cast<int>(bits > (kToleranceBits | kSignBit));
-}
 
 /**
  * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
@@ -285,7 +262,7 @@ DistanceResult capsuleCapsule(const Eigen::Vector3d& p1, const Eigen::Vector3d& 
 {
   DistanceResult out;
   if (capsulePairFast(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal))
-    out.code = classifyFinite(out.distance);
+    out.code = classify(out.distance);
   else
     out.code = capsulePairAnyScale(p1, p2, r1, p3, p4, r2, out.distance, out.point1, out.point2, out.normal);
   if (!capsulePairValid(out.distance, r1, r2))
@@ -303,7 +280,7 @@ int dist_capsule_to_capsule(const Eigen::Vector3d& P1, const Eigen::Vector3d& P2
   Eigen::Vector3d normal;  // not an output of this signature
   if (!capsulePairFast(P1, P2, r1, P3, P4, r2, distance, point_on_capsule1, point_on_capsule2, normal))
     return capsuleCapsuleCareful(P1, P2, P3, P4, r1, r2, distance, point_on_capsule1, point_on_capsule2);
-  return classifyFinite(distance);
+  return classify(distance);
 }
 
 }  // namespace saras_collision
