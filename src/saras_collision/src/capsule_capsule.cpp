@@ -13,12 +13,13 @@ using namespace detail;  // NOLINT(build/namespaces): this library's own private
 
 namespace
 {
-/// Bound on a + e + |v|^2 + r1 + r2 of the fast path [m^2 + m]: keeps every product below 2^990.
-constexpr double kFastRange = 0x1p240;
-/// sin^2 of the angle between the axes above which a e - b^2 does not cancel (fast path).
-constexpr double kNonParallel = 1e-3;
+/// Bound on each of a, e, |v|^2 [m^2] and r1, r2 [m] of the fast path: keeps every product
+/// below 2^970.
+constexpr double kFastRange = 0x1p238;
 /// |v|^2 above which the fast path takes the normal from v (1 / |v|^2 finite) [m^2].
 constexpr double kMinFastAxis2 = 1e-290;
+/// -kTangentTolerance as an object in memory (operand of zeroIfLess()) [m].
+const double kMinusTangentTolerance = -kTangentTolerance;
 
 /**
  * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
@@ -117,36 +118,44 @@ SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::V
 
 /**
  * Fast path of capsulePair() for the general case: non-degenerate axes more than ~1.8 degrees
- * from parallel (sin^2 > 1e-3, so that a e - b^2 does not cancel) whose closest points do not
- * coincide, radii >= 0. Same minimiser (Ericson 5.1.9), written for few instructions (the
- * benchmark loop overlaps consecutive queries, so the instruction count matters as much as the
- * dependency chain): every clamp is taken division-free on a numerator over a common
- * denominator (D = a e - b^2 = |d1 x d2|^2, M = a e D):
- *   sn = b f - c e (unconstrained s* = sn / D), sc = clamp(sn, 0, D);
- *   tn = b sc + f D (t re-optimised for the clamped s, times e D);
+ * from parallel (sin^2 of their angle > 1e-3, so that a e - b^2 does not cancel) whose closest
+ * points do not coincide, radii >= 0. Same minimiser (Ericson 5.1.9), written for few
+ * floating-point instructions and a short dependency chain (the benchmark loop overlaps
+ * consecutive queries, and the overlap is limited by the floating-point instructions in flight).
+ * The axes are taken as d1 = p1 - p2, d2 = p3 - p4 (the opposite of Ericson's p2 - p1, p4 - p3),
+ * so that p2 and p4 are read once, as memory operands of the subtractions; then, with
+ * w = p1 - p3, a = |d1|^2, e = |d2|^2, b = d1.d2, c = d1.w, f = d2.w, the parameters s, t of the
+ * closest points p1 - s d1, p3 - t d2 minimise |w - s d1 + t d2|^2 over [0, 1]^2. Every clamp is
+ * taken division-free on a numerator over a common denominator (D = a e - b^2 = |d1 x d2|^2,
+ * M = a e D):
+ *   sn = c e - b f (unconstrained s* = sn / D), sc = clamp(sn, 0, D);
+ *   tn = b sc - f D (t re-optimised for the clamped s, times e D);
  *   tc = clamp(tn, 0, e D)                          (t = tc / (e D) = T / M, T = tc a);
- *   S = clamp(b tc - c e D, 0, M)                   (s = clamp((b t - c) / a, 0, 1) = S / M).
+ *   S = clamp(b tc + c e D, 0, M)                   (s = clamp((b t + c) / a, 0, 1) = S / M).
  * The last line is Ericson's "recompute s for the clamped t" and, when t was not clamped, it
  * gives back sc / D: either s* is interior and (s, t) is the stationary point, where
- * (b t - c) / a = s exactly, or sc is a bound and the KKT condition of the convex problem at
- * that bound (dF/ds >= 0 at s = 0, <= 0 at s = 1) puts (b t - c) / a beyond it. No selects.
+ * (b t + c) / a = s exactly, or sc is a bound and the KKT condition of the convex problem at
+ * that bound (dF/ds >= 0 at s = 0, <= 0 at s = 1) puts (b t + c) / a beyond it. No selects.
  * Then one reciprocal 1 / M gives s and t, the closest axis points q1, q2 (needed for the
  * outputs anyway) and v = q1 - q2, so that the distance is |v| - r1 - r2 without a rescaling
  * (fewer instructions than forming M v from the numerators; the division overlaps the clamps);
  * 1 / |v| = sqrt(|v|^2) / |v|^2, the division overlapping the square root. M is a normal
  * number (a, e > 1e-30, D > 1e-3 a e).
- * Inputs are validated by the guard alone, after the computation (off the critical path):
- *  - range: a + e + |v|^2 + r1 + r2 < 2^240 bounds |d1|, |d2|, |v| by 2^120 and, since
- *    w = v - s d1 + t d2 with s, t in [0, 1] (they come out of clamps whatever happened
- *    before), |w| < 2^122. Then every product above is below 2^990: no overflow, so no clamp
- *    turned an infinity into a bound and no inf - inf made a NaN that a clamp hid;
+ * Inputs are validated by the guard alone, after the computation (off the critical path), on the
+ * bit patterns of a, e, |v|^2, D, r1 and r2 (integer compares: no floating-point instruction but
+ * the moves of the bits; IEEE 754 binary64 patterns of non-negative numbers order as the numbers,
+ * NaN and negative patterns, read as unsigned integers, lie above +inf's):
+ *  - range: each of a, e, |v|^2, r1 and r2 below 2^238, so their sum is below 2^241 and |d1|,
+ *    |d2|, |v| < 2^120.5 and, since w = v + s d1 - t d2 with s, t in [0, 1] (they come out of
+ *    clamps whatever happened before), |w| < 2^122.1. Then every product above is below 2^970:
+ *    no overflow, so no clamp turned an infinity into a bound and no inf - inf made a NaN that a
+ *    clamp hid;
  *  - finiteness: a NaN or infinite coordinate of p1 or p2 makes a (through d1) non-finite, of
- *    p3 or p4 makes e so; a NaN or +inf radius makes r1 + r2 so; all fail the range test
- *    (false on NaN). A radius of -inf fails the radius test;
- *  - margins: both axes longer than 1e-15 m, sin^2 of their angle above 1e-3, closest axis
- *    points apart (|v|^2 > 1e-290, so that 1 / |v|^2 is finite): one minimum, which needs no
- *    NaN handling since NaN inputs already failed the range test;
- *  - radii >= 0 (+0 and -0 included).
+ *    p3 or p4 makes e so; a NaN, infinite or negative radius (-0 included: the careful path
+ *    takes it) fails its own range test;
+ *  - margins: both axes longer than 1e-15 m (a, e > 1e-30), closest axis points apart
+ *    (|v|^2 > 1e-290, so that 1 / |v|^2 is finite), and D > 1e-3 a e (notNearlyParallelBits():
+ *    never below 1e-3, always above 1.23e-3).
  * Lengths beyond ~1e36 m fail the range test and go to capsulePairAnyScale(), which scales.
  * @return false (outputs untouched) when the case is not general, an input is not finite, a
  *         radius is negative or not finite, or the magnitudes are outside the range above;
@@ -162,47 +171,49 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
   // Scalar code: GCC -O2 emits fewer instructions for it than for the Eigen 3-vector
   // expressions (and this file is compiled without SLP vectorisation, see CMakeLists.txt).
   const double p1x = p1[0], p1y = p1[1], p1z = p1[2], p3x = p3[0], p3y = p3[1], p3z = p3[2];
-  const double d1x = p2[0] - p1x, d1y = p2[1] - p1y, d1z = p2[2] - p1z;
-  const double d2x = p4[0] - p3x, d2y = p4[1] - p3y, d2z = p4[2] - p3z;
+  const double d1x = p1x - p2[0], d1y = p1y - p2[1], d1z = p1z - p2[2];
+  const double d2x = p3x - p4[0], d2y = p3y - p4[1], d2z = p3z - p4[2];
   const double wx = p1x - p3x, wy = p1y - p3y, wz = p1z - p3z;
   const double a = d1x * d1x + d1y * d1y + d1z * d1z;
   const double e = d2x * d2x + d2y * d2y + d2z * d2z;
   const double b = d1x * d2x + d1y * d2y + d1z * d2z;
   const double c = d1x * wx + d1y * wy + d1z * wz;
   const double f = d2x * wx + d2y * wy + d2z * wz;
-  const double ae = a * e;
-  const double denom = ae - b * b;  // |d1 x d2|^2; cancels near parallel: then capsulePair()
+  const double bb = b * b;
+  const double denom = a * e - bb;  // |d1 x d2|^2; cancels near parallel: then capsulePair()
   const double ed = e * denom;
-  const double m = ae * denom;
+  const double m = a * ed;
   const double rho = 1.0 / m;  // in parallel with the clamps
-  const double sn = b * f - c * e;
+  const double sn = c * e - b * f;
   const double sc = minD(maxD(sn, 0.0), denom);
-  const double tn = b * sc + f * denom;
+  const double tn = b * sc - f * denom;
   const double tc = minD(maxD(tn, 0.0), ed);  // t = tc / (e D) = tc a / M
-  const double sv = b * tc - c * ed;
-  const double S = minD(maxD(sv, 0.0), m);  // s = clamp((b t - c) / a) = S / M
+  const double sv = b * tc + c * ed;
+  const double S = minD(maxD(sv, 0.0), m);  // s = clamp((b t + c) / a) = S / M
   // s, t in [0, 1] up to a few ulps (S <= M and T = tc a <= e D a ~ M up to rounding): no clamp,
   // the points may lie beyond an end of the axis by ~1e-16 of its length.
   const double s = S * rho, t = (tc * a) * rho;
-  const double q1x = p1x + s * d1x, q1y = p1y + s * d1y, q1z = p1z + s * d1z;
-  const double q2x = p3x + t * d2x, q2y = p3y + t * d2y, q2z = p3z + t * d2z;
+  const double q1x = p1x - s * d1x, q1y = p1y - s * d1y, q1z = p1z - s * d1z;
+  const double q2x = p3x - t * d2x, q2y = p3y - t * d2y, q2z = p3z - t * d2z;
   const double vx = q1x - q2x, vy = q1y - q2y, vz = q1z - q2z;
   const double v2 = vx * vx + vy * vy + vz * vz;
   const double rr = r1 + r2;
-  // Three predictable branches for every special case (each test is false on NaN; see the
-  // proof above): range and finiteness, the general-case margins, the radii.
-  const double margin = minD(minD(minD(a, e) - kDegenerateLength2, denom - kNonParallel * ae), v2 - kMinFastAxis2);
-  if (!((a + e) + (v2 + rr) < kFastRange) || !(margin > 0.0) || !(minD(r1, r2) >= 0.0))
+  // The guard (see above), on bit patterns; & rather than && so that it stays one branch.
+  const std::uint64_t hi = bitsOf(kFastRange), min_axis = bitsOf(kDegenerateLength2);
+  const std::uint64_t ua = bitsOf(a), ue = bitsOf(e);
+  const bool general = bitsInOpenRange(ua, min_axis, hi) & bitsInOpenRange(ue, min_axis, hi) &
+                       bitsInOpenRange(bitsOf(v2), bitsOf(kMinFastAxis2), hi) & (bitsOf(r1) < hi) &
+                       (bitsOf(r2) < hi) & notNearlyParallelBits(ua, ue, bitsOf(denom));
+  if (!general)
     return false;
   const double len = std::sqrt(v2);
-  const double inv_v2 = 1.0 / v2;  // overlaps the square root, as do the next products
-  const double r1_v2 = r1 * inv_v2, r2_v2 = r2 * inv_v2;
+  const double inv_v2 = 1.0 / v2;  // overlaps the square root
   const double dist = len - rr;
   const double inv_len = len * inv_v2;
-  // Radius offsets along the normal, r_i v / |v| = v (len r_i / |v|^2), zeroed (through len)
-  // without a branch when intersecting (witness points on the axes).
-  const double lenm = selectLess(dist, -kTangentTolerance, 0.0, len);
-  const double k1 = lenm * r1_v2, k2 = lenm * r2_v2;
+  // Radius offsets along the normal, r_i v / |v|, zeroed (through 1 / |v|) without a branch when
+  // intersecting (witness points on the axes).
+  const double inv_len_or_0 = zeroIfLess(dist, &kMinusTangentTolerance, inv_len);
+  const double k1 = inv_len_or_0 * r1, k2 = inv_len_or_0 * r2;
   normal = Eigen::Vector3d(vx * inv_len, vy * inv_len, vz * inv_len);
   point1 = Eigen::Vector3d(q1x - k1 * vx, q1y - k1 * vy, q1z - k1 * vz);
   point2 = Eigen::Vector3d(q2x + k2 * vx, q2y + k2 * vy, q2z + k2 * vz);

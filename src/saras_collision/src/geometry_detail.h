@@ -79,6 +79,43 @@ inline bool allFinite(const Eigen::Vector3d& a, const Eigen::Vector3d& b)
   return std::isfinite((a + b).sum() + (a - b).sum());
 }
 
+/// The IEEE 754 binary64 bit pattern of @p x (for integer compares that cost no floating-point
+/// instruction; see classify()).
+inline std::uint64_t bitsOf(double x)
+{
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return bits;
+}
+
+/// lo < x < hi for the bit patterns of doubles lo < hi, both non-negative and finite, and any x
+/// (false for NaN, negative x and -0), in one unsigned compare: IEEE 754 binary64 patterns of
+/// non-negative numbers order as the numbers, and those of NaN and negative numbers, read as
+/// unsigned integers, lie above +inf's.
+inline bool bitsInOpenRange(std::uint64_t x, std::uint64_t lo, std::uint64_t hi)
+{
+  return x - lo - 1 < hi - lo - 1;
+}
+
+/// Bit-pattern distance of the test in notNearlyParallelBits(): 9.75 * 2^52.
+constexpr std::uint64_t kNearlyParallelBits = std::uint64_t{ 39 } << 50;
+
+/**
+ * A sufficient test of d > 1e-3 a e on the bit patterns of a, e > 0 (normal, a e not
+ * overflowing) and of any d, in integer operations only. bits / 2^52 - 1023 is a piecewise-linear
+ * log2 at most 0.0861 below log2 (x = 2^k (1 + m), m in [0, 1): log2(1 + m) - m <= 0.0861), so
+ * bits(d) - bits(a) - bits(e) + bits(1) > -9.75 * 2^52 implies
+ * log2(d / (a e)) > -9.75 - 2 * 0.0861 > log2(1e-3); conversely every d / (a e) above
+ * 2^(-9.75 + 0.0861) = 1.23e-3 passes. A d <= 0 (or NaN with the sign bit) has a negative
+ * pattern as a signed integer and fails. Used by the capsule-capsule fast path to stay away from
+ * (nearly) parallel axes, where a e - b^2 cancels.
+ */
+inline bool notNearlyParallelBits(std::uint64_t a, std::uint64_t e, std::uint64_t d)
+{
+  const auto bound = static_cast<std::int64_t>(a + e - bitsOf(1.0) - kNearlyParallelBits);
+  return static_cast<std::int64_t>(d) > bound;
+}
+
 // Branch-free min / max (minsd / maxsd): GCC -O2 turns std::min / std::max into compare-and-
 // jump sequences, which random queries mispredict. Not for NaN arguments (inputs are checked).
 // GCC / Clang: one instruction in inline assembly (the intrinsics' _mm_set_sd adds a movq that
@@ -121,6 +158,27 @@ inline double selectLess(double x, double y, double if_less, double otherwise)
   return _mm_cvtsd_f64(_mm_or_pd(_mm_and_pd(mask, _mm_set_sd(if_less)), _mm_andnot_pd(mask, _mm_set_sd(otherwise))));
 #else
   return x < y ? if_less : otherwise;
+#endif
+}
+
+/**
+ * x < *limit ? +0.0 : value, without a branch: a register copy of x (vmovapd, which the CPU
+ * eliminates at register renaming), cmpltsd and andnpd, without the copies and zeroed upper
+ * lanes that the compiler adds to selectLess(). @p limit is read from memory (no register for
+ * it). x and value must not be NaN.
+ */
+inline double zeroIfLess(double x, const double* limit, double value)
+{
+#if defined(SARAS_COLLISION_VEX_ASM)
+  double out;
+  __asm__("%vmovapd %1, %0\n\t%vcmpltsd %2, %d0\n\t%vandnpd %3, %d0" : "=&v"(out) : "v"(x), "m"(*limit), "v"(value));
+  return out;
+#elif defined(__SSE2__) && defined(__GNUC__)
+  double out;
+  __asm__("movapd %1, %0\n\tcmpltsd %2, %0\n\tandnpd %3, %0" : "=&x"(out) : "x"(x), "m"(*limit), "x"(value));
+  return out;
+#else
+  return x < *limit ? 0.0 : value;
 #endif
 }
 
@@ -173,8 +231,7 @@ inline int classify(double distance, int separated_code = kSeparated)
   constexpr std::uint64_t kToleranceBits = 0x3e112e0be826d695;  // 1e-9
   constexpr std::uint64_t kInfinityBits = 0x7ff0000000000000;
   constexpr std::uint64_t kSignBit = std::uint64_t{ 1 } << 63;
-  std::uint64_t bits;
-  std::memcpy(&bits, &distance, sizeof bits);
+  const std::uint64_t bits = bitsOf(distance);
   const auto positive = static_cast<std::int64_t>(bits);  // < 0 for every negative pattern
   const bool above = positive > static_cast<std::int64_t>(kToleranceBits) &&
                      positive <= static_cast<std::int64_t>(kInfinityBits);

@@ -373,6 +373,33 @@ TEST(CapsuleCapsule, InvalidInputIsAnErrorCodeNotANumber)
   EXPECT_TRUE(std::isnan(a.x()));
 }
 
+// A radius of -0 is a radius of 0 (r >= 0 holds), not an invalid input, though the fast path's
+// bit-pattern range test hands it to the careful path: the same answer as +0, on both entry
+// points.
+TEST(CapsuleCapsule, NegativeZeroRadiusIsZero)
+{
+  const Vector3d p1(0, 0, 0), p2(1, 0, 0), p3(0.5, 0.3, 0.4), p4(0.5, 1.3, 0.4);
+  for (const auto& radii : { std::make_pair(-0.0, 0.1), std::make_pair(0.1, -0.0), std::make_pair(-0.0, -0.0) })
+  {
+    double d_neg, d_pos;
+    Vector3d a_neg, b_neg, a_pos, b_pos;
+    const int code_neg = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, radii.first, radii.second, d_neg,
+                                                                  a_neg, b_neg);
+    const int code_pos = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, std::abs(radii.first),
+                                                                  std::abs(radii.second), d_pos, a_pos, b_pos);
+    EXPECT_EQ(code_neg, saras_collision::kSeparated);
+    EXPECT_EQ(code_pos, saras_collision::kSeparated);
+    EXPECT_NEAR(d_neg, 0.5 - std::abs(radii.first) - std::abs(radii.second), 1e-15);
+    EXPECT_NEAR(d_neg, d_pos, 1e-15);
+    EXPECT_LE((a_neg - a_pos).norm(), 1e-15);
+    EXPECT_LE((b_neg - b_pos).norm(), 1e-15);
+    const saras_collision::DistanceResult full =
+        saras_collision::capsuleCapsule(p1, p2, radii.first, p3, p4, radii.second);
+    EXPECT_EQ(full.code, saras_collision::kSeparated);
+    EXPECT_EQ(full.distance, d_neg);
+  }
+}
+
 TEST(CapsuleCapsule, RandomAgainstFclAndReference)
 {
   Random rnd;
@@ -430,8 +457,9 @@ TEST(CapsuleCapsule, RandomAgainstFclAndReference)
   EXPECT_GT(intersecting, kRandomCases / 20);
 }
 
-// The general-case fast path (axes more than ~1.8 degrees from parallel: sin^2 > 1e-3) and the
-// careful path (cross-product denominator) meet at that angle: both sides of the switch, and
+// The general-case fast path (axes more than ~1.8 degrees from parallel: sin^2 > 1e-3, the
+// switch lying between 1e-3 and 1.23e-3) and the careful path (cross-product denominator) meet
+// at that angle: both sides of the switch, and
 // every clamping region of both parameters, must still be exact and never overstated.
 TEST(CapsuleCapsule, ExactOnBothSidesOfTheFastPathAngle)
 {
@@ -591,8 +619,8 @@ TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
   EXPECT_TRUE(std::isnan(d));
 }
 
-// The general-case path takes a + e + |v|^2 + r1 + r2 < 2^240 as its range (no product can
-// overflow below it) and hands larger inputs to the careful path: the same answer, scaled, on
+// The general-case path takes each of a, e, |v|^2, r1, r2 below 2^238 as its range (no product
+// can overflow below it) and hands larger inputs to the careful path: the same answer, scaled, on
 // both sides of the bound (scaling by a power of two is exact), for both entry points.
 TEST(CapsuleCapsule, SameAnswerOnBothSidesOfTheFastPathRangeBound)
 {
@@ -609,7 +637,7 @@ TEST(CapsuleCapsule, SameAnswerOnBothSidesOfTheFastPathRangeBound)
     Vector3d a, b;
     const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
     ASSERT_NEAR(d, segmentSegmentRef(p1, p2, p3, p4) - r1 - r2, 1e-12) << k;
-    for (int e = 105; e <= 135; ++e)  // the bound is crossed between 2^118 and 2^130 for these sizes
+    for (int e = 105; e <= 135; ++e)  // the bound is crossed between 2^116 and 2^128 for these sizes
     {
       const double scale = std::ldexp(1.0, e);
       double ds;
