@@ -18,8 +18,6 @@ namespace
 constexpr double kFastRange = 0x1p238;
 /// |v|^2 above which the fast path takes the normal from v (1 / |v|^2 finite) [m^2].
 constexpr double kMinFastAxis2 = 1e-290;
-/// -kTangentTolerance as an object in memory (operand of zeroIfLess()) [m].
-const double kMinusTangentTolerance = -kTangentTolerance;
 
 /**
  * Capsule-capsule input check, done on the result of capsulePair() (so that it is not in
@@ -212,7 +210,7 @@ SARAS_COLLISION_INLINE bool capsulePairFast(const Eigen::Vector3d& p1, const Eig
   const double inv_len = len * inv_v2;
   // Radius offsets along the normal, r_i v / |v|, zeroed (through 1 / |v|) without a branch when
   // intersecting (witness points on the axes).
-  const double inv_len_or_0 = zeroIfLess(dist, &kMinusTangentTolerance, inv_len);
+  const double inv_len_or_0 = unlessIntersecting(dist, inv_len);
   const double k1 = inv_len_or_0 * r1, k2 = inv_len_or_0 * r2;
   normal = Eigen::Vector3d(vx * inv_len, vy * inv_len, vz * inv_len);
   point1 = Eigen::Vector3d(q1x - k1 * vx, q1y - k1 * vy, q1z - k1 * vz);

@@ -500,7 +500,7 @@ int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3
   const double axis = std::sqrt(axis2);
   const double dist = axis - r;
   // r / axis = r axis / axis2 (the division overlaps the square root); 0 when intersecting.
-  const double scale = selectLess(dist, -kTangentTolerance, 0.0, axis) * (r * (1.0 / axis2));
+  const double scale = unlessIntersecting(dist, axis) * (r * (1.0 / axis2));
   distance = dist;
   point_on_parall = s - off;
   point_on_sphere = s - scale * off;

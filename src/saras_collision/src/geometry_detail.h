@@ -165,7 +165,7 @@ inline double selectLess(double x, double y, double if_less, double otherwise)
  * x < *limit ? +0.0 : value, without a branch: a register copy of x (vmovapd, which the CPU
  * eliminates at register renaming), cmpltsd and andnpd, without the copies and zeroed upper
  * lanes that the compiler adds to selectLess(). @p limit is read from memory (no register for
- * it). x and value must not be NaN.
+ * it). A NaN x gives value (the comparison is false).
  */
 inline double zeroIfLess(double x, const double* limit, double value)
 {
@@ -239,11 +239,21 @@ inline int classify(double distance, int separated_code = kSeparated)
   return static_cast<int>(above) * separated_code - static_cast<int>(below);
 }
 
-/// 1 if the code keeps surface points (not intersecting), else 0: selects the witness points
-/// without a branch.
+/**
+ * The witness-point switch of every distance function: @p value unless the signed @p distance
+ * is intersecting (below -kTangentTolerance, exactly where classify() says kIntersecting), then
+ * +0; without a branch. NaN: @p value, as the comparison is false.
+ */
+inline double unlessIntersecting(double distance, double value)
+{
+  static const double kMinusTangentTolerance = -kTangentTolerance;  // a memory operand
+  return zeroIfLess(distance, &kMinusTangentTolerance, value);
+}
+
+/// 1 if the code keeps surface points (not intersecting), else 0 (unlessIntersecting()).
 inline double surfaceFactor(double distance)
 {
-  return selectLess(distance, -kTangentTolerance, 0.0, 1.0);
+  return unlessIntersecting(distance, 1.0);
 }
 
 /// Writes the error outputs of the deliverable signatures (NaN distance and points).

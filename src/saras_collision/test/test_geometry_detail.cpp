@@ -109,16 +109,19 @@ TEST(GeometryDetail, NotNearlyParallelBitsBracketsTheAngleBound)
   EXPECT_TRUE(notNearlyParallelBits(bitsOf(1.0), bitsOf(1.0), bitsOf(1.24e-3)));
 }
 
-// zeroIfLess() is x < limit ? +0 : value (the witness-point switch of the capsule-capsule
-// fast path), at and around the limit.
-TEST(GeometryDetail, ZeroIfLessAtTheLimit)
+// zeroIfLess() is x < limit ? +0 : value, and unlessIntersecting() (the witness-point switch of
+// every distance function) zeroes exactly where classify() says kIntersecting, at and one ulp
+// around -kTangentTolerance.
+TEST(GeometryDetail, ZeroIfLessAndTheWitnessSwitchAtTheLimit)
 {
-  const double limit = -1e-9;
+  const double limit = -saras_collision::kTangentTolerance;
   const double value = 0.75;
   for (double x : { limit, std::nextafter(limit, 0.0), std::nextafter(limit, -1.0), 0.0, -0.0, 1.0, -1.0,
-                    std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity() })
+                    std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::quiet_NaN() })
   {
     const double out = saras_collision::detail::zeroIfLess(x, &limit, value);
+    const double witness = saras_collision::detail::unlessIntersecting(x, value);
     if (x < limit)
     {
       EXPECT_EQ(bitsOf(out), bitsOf(0.0)) << x;
@@ -127,6 +130,8 @@ TEST(GeometryDetail, ZeroIfLessAtTheLimit)
     {
       EXPECT_EQ(out, value) << x;
     }
+    EXPECT_EQ(bitsOf(witness), bitsOf(out)) << x;
+    EXPECT_EQ(witness == 0.0, saras_collision::detail::classify(x) == saras_collision::kIntersecting) << x;
   }
 }
 
