@@ -55,6 +55,27 @@ double segmentSegmentRef(const Vector3d& p1, const Vector3d& p2, const Vector3d&
   return best;
 }
 
+/// dist_capsule_to_capsule() on one pair (outputs @p code, @p d, @p a, @p b), checked against the
+/// exact reference segmentSegmentRef() - r1 - r2 (also written to @p reference when given): a valid
+/// code, the distance within @p tolerance of the reference and not above it by more than that
+/// (never overstated).
+::testing::AssertionResult answerNearReference(const Vector3d& p1, const Vector3d& p2, const Vector3d& p3,
+                                               const Vector3d& p4, double r1, double r2, double tolerance, int& code,
+                                               double& d, Vector3d& a, Vector3d& b, double* reference = nullptr)
+{
+  code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
+  const double ref = segmentSegmentRef(p1, p2, p3, p4) - r1 - r2;
+  if (reference != nullptr)
+    *reference = ref;
+  if (!saras_collision::isValidCode(code))
+    return ::testing::AssertionFailure() << "invalid code " << code;
+  if (!(std::abs(d - ref) <= tolerance))
+    return ::testing::AssertionFailure() << "distance " << d << " vs reference " << ref;
+  if (!(d <= ref + tolerance))
+    return ::testing::AssertionFailure() << "overstated: " << d << " vs reference " << ref;
+  return ::testing::AssertionSuccess();
+}
+
 /// Exact signed distance of a point to a box (negative inside).
 double pointBoxSigned(const Vector3d& p, const OrientedBox& box)
 {
@@ -413,14 +434,11 @@ TEST(CapsuleCapsule, RandomAgainstFclAndReference)
     if (k % 10 == 0)  // exactly parallel pairs
       p4 = p3 + (p2 - p1) * rnd.uniform(-1.5, 1.5);
     const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
-    double d;
+    int code;
+    double d, ref;
     Vector3d a, b;
-    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
-    const double ref = segmentSegmentRef(p1, p2, p3, p4) - r1 - r2;
-    ASSERT_TRUE(saras_collision::isValidCode(code)) << k;
+    ASSERT_TRUE(answerNearReference(p1, p2, p3, p4, r1, r2, 1e-12, code, d, a, b, &ref)) << "case " << k;
     worst_ref = std::max(worst_ref, std::abs(d - ref));
-    ASSERT_NEAR(d, ref, 1e-12) << "case " << k;
-    ASSERT_LE(d, ref + 1e-12) << "overstated, case " << k;
     if (code == saras_collision::kSeparated || code == saras_collision::kParallel)
     {
       ++separated;
@@ -479,13 +497,10 @@ TEST(CapsuleCapsule, ExactOnBothSidesOfTheFastPathAngle)
     const Vector3d p3 = p1 + rnd.point(0.08), p4 = p3 + d2;
     const Vector3d p2 = p1 + d1;
     const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    int code;
     double d;
     Vector3d a, b;
-    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
-    const double ref = segmentSegmentRef(p1, p2, p3, p4) - r1 - r2;
-    ASSERT_TRUE(saras_collision::isValidCode(code)) << k;
-    ASSERT_NEAR(d, ref, 1e-12) << "case " << k;
-    ASSERT_LE(d, ref + 1e-12) << "overstated, case " << k;
+    ASSERT_TRUE(answerNearReference(p1, p2, p3, p4, r1, r2, 1e-12, code, d, a, b)) << "case " << k;
     if (code == saras_collision::kSeparated)
     {
       ASSERT_NEAR((a - b).norm(), d, 1e-12) << k;
@@ -583,10 +598,10 @@ TEST(CapsuleCapsule, ScaleInvariantAcrossTheFastPathGuards)
     if (k % 10 == 0)  // parallel pairs: careful path at every scale
       p4 = p3 + (p2 - p1) * rnd.uniform(-1.5, 1.5);
     const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    int code;
     double d;
     Vector3d a, b;
-    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
-    ASSERT_NEAR(d, segmentSegmentRef(p1, p2, p3, p4) - r1 - r2, 1e-12) << k;
+    ASSERT_TRUE(answerNearReference(p1, p2, p3, p4, r1, r2, 1e-12, code, d, a, b)) << k;
     for (double scale : { 1e-12, 1e-6, 1e-3, 1e3, 1e12, 1e25, 1e30, 1e60, 1e75, 1e100, 1e150, 1e160, 1e300 })
     {
       double ds;
@@ -633,10 +648,10 @@ TEST(CapsuleCapsule, SameAnswerOnBothSidesOfTheFastPathRangeBound)
     rnd.segment(p3, p4, 0.5);
     p2 = p1 + (p2 - p1) * rnd.uniform(1.0, 20.0);  // up to 2.4 long, up to ~1.7 apart
     const double r1 = rnd.uniform(0.0, 0.01), r2 = rnd.uniform(0.0, 0.01);
+    int code;
     double d;
     Vector3d a, b;
-    const int code = saras_collision::dist_capsule_to_capsule(p1, p2, p3, p4, r1, r2, d, a, b);
-    ASSERT_NEAR(d, segmentSegmentRef(p1, p2, p3, p4) - r1 - r2, 1e-12) << k;
+    ASSERT_TRUE(answerNearReference(p1, p2, p3, p4, r1, r2, 1e-12, code, d, a, b)) << k;
     for (int e = 105; e <= 135; ++e)  // the bound is crossed between 2^116 and 2^128 for these sizes
     {
       const double scale = std::ldexp(1.0, e);
