@@ -171,7 +171,10 @@ inline double zeroIfLess(double x, const double* limit, double value)
 {
 #if defined(SARAS_COLLISION_VEX_ASM)
   double out;
-  __asm__("%vmovapd %1, %0\n\t%vcmpltsd %2, %d0\n\t%vandnpd %3, %d0" : "=&v"(out) : "v"(x), "m"(*limit), "v"(value));
+  // The output is "x" (xmm0-15), not "v": in AVX-512 code a compare into xmm16-31 has no encoding
+  // (EVEX compares write mask registers), so "v" assembled only while the register allocator
+  // happened to pick a low register.
+  __asm__("%vmovapd %1, %0\n\t%vcmpltsd %2, %d0\n\t%vandnpd %3, %d0" : "=&x"(out) : "v"(x), "m"(*limit), "v"(value));
   return out;
 #elif defined(__SSE2__) && defined(__GNUC__)
   double out;
