@@ -118,8 +118,9 @@ SARAS_COLLISION_INLINE int capsulePair(const Eigen::Vector3d& p1, const Eigen::V
  * Fast path of capsulePair() for the general case: non-degenerate axes more than ~1.8 degrees
  * from parallel (sin^2 of their angle > 1e-3, so that a e - b^2 does not cancel) whose closest
  * points do not coincide, radii >= 0. Same minimiser (Ericson 5.1.9), written for few
- * floating-point instructions and a short dependency chain (the benchmark loop overlaps
- * consecutive queries, and the overlap is limited by the floating-point instructions in flight).
+ * floating-point instructions and a short dependency chain (the benchmark loop overlaps about
+ * two consecutive queries; the latency of the chain that ends a query sets the time more than
+ * instructions off it do: README, session-12 probes).
  * The axes are taken as d1 = p1 - p2, d2 = p3 - p4 (the opposite of Ericson's p2 - p1, p4 - p3),
  * so that p2 and p4 are read once, as memory operands of the subtractions; then, with
  * w = p1 - p3, a = |d1|^2, e = |d2|^2, b = d1.d2, c = d1.w, f = d2.w, the parameters s, t of the

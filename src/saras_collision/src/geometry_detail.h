@@ -223,8 +223,8 @@ inline Eigen::Vector3d anyPerpendicular(const Eigen::Vector3d& v)
  * Computed by integer compares of the bit pattern (IEEE 754 binary64: non-negative doubles order
  * as their patterns read as signed integers, negative ones in reverse order as unsigned
  * integers; NaN patterns lie beyond the infinities'), so that it costs no floating-point
- * instruction but the move of the bits: the capsule-capsule query's throughput depends on its
- * floating-point instruction count (15.6 -> 15.1 ns in the benchmark). Same result as the
+ * instruction but the move of the bits (capsule-capsule 15.6 -> 15.1 ns in the benchmark when
+ * it replaced the floating-point compares). Same result as the
  * floating-point form for every double (checked for both switches to the ulp by the gtest
  * CapsuleCapsule.WitnessPointsAndCodeSwitchAtTheTangentBand).
  */
