@@ -1,0 +1,1 @@
+"""Pieces shared by every SARAS Python package, each implemented once."""
