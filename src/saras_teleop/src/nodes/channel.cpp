@@ -28,20 +28,20 @@ class ChannelNode
 public:
   ChannelNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/) : nh_(nh)
   {
+    using saras_common::nonNegative;
+    const saras_common::Params prm(pnh);
     ChannelParams p;
-    p.delay = paramDouble(pnh, "delay_ms", 0.0) * 1e-3;
-    p.jitter = paramDouble(pnh, "jitter_ms", 0.0) * 1e-3;
-    p.loss = paramDouble(pnh, "loss", 0.0);
-    p.burst_length = paramDouble(pnh, "burst_length", 1.0);
-    int seed = 1;
-    pnh.param("seed", seed, 1);
-    p.seed = static_cast<std::uint32_t>(seed);
+    p.delay = prm.number("delay_ms", 0.0, "ms", { nonNegative() }) * 1e-3;
+    p.jitter = prm.number("jitter_ms", 0.0, "ms", { nonNegative() }) * 1e-3;
+    p.loss = prm.number("loss", 0.0, "", { nonNegative() });  // < 1: ChannelParams::validate()
+    p.burst_length = prm.number("burst_length", 1.0, "messages", { saras_common::atLeast(1.0) });
+    p.seed = static_cast<std::uint32_t>(prm.integer("seed", 1, "", { nonNegative() }));
     p.validate();
-    suffix_ = paramString(pnh, "suffix", "_delayed");
-    const double rate = paramPositive(pnh, "rate", 2000.0);
-    std::vector<std::string> topics;
-    if (!pnh.getParam("topics", topics) || topics.empty())
-      throw std::invalid_argument("parameter '" + pnh.resolveName("topics") + "' must be a non-empty list of topics");
+    suffix_ = prm.text("suffix", "_delayed", { saras_common::nonEmpty() });
+    const double rate = prm.number("rate", 2000.0, "Hz", { saras_common::positive() });
+    const std::vector<std::string> topics = prm.texts("topics", {}, { saras_common::nonEmpty() });
+    if (topics.empty())
+      prm.fail("topics", "[]", "", "a non-empty list of topics");
     passthrough_ = p.delay == 0.0 && p.jitter == 0.0;
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     for (std::size_t i = 0; i < topics.size(); ++i)

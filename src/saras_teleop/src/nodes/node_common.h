@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -22,86 +23,36 @@
 #include <ros/ros.h>
 #include <saras_msgs/ComponentStatus.h>
 
+#include "saras_common/message_pool.h"
+#include "saras_common/params.h"
 #include "saras_teleop/energy_tank.h"
 
 namespace saras_teleop
 {
 namespace node
 {
+using saras_common::MessagePool;
+
 /// Outgoing queue of the control-stream publishers, per subscriber connection [messages]: 0.1 s at
 /// 1 kHz, 0.4 s at 250 Hz. It only fills while a TCP subscriber (e.g. the recorder) or this process's
 /// writer thread is stalled; with ROS's 10 such a stall of 10 ms at 1 kHz already lost samples in the
 /// bag. In-manager (zero-copy) subscribers never queue here.
 constexpr uint32_t kStreamQueue = 100;
 
-/// Read a finite double (default if absent); throws std::invalid_argument naming the parameter.
-inline double paramDouble(const ros::NodeHandle& nh, const std::string& name, double def)
+/// A 6-vector parameter: a list of 6 numbers, or one number used for every entry (each checked by @p rules).
+inline Vector6d paramVector6(const saras_common::Params& p, const std::string& name, const Vector6d& def,
+                             const std::string& unit, std::initializer_list<saras_common::NumberRule> rules = {})
 {
-  double v = def;
-  if (nh.hasParam(name) && !nh.getParam(name, v))
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a number");
-  if (!std::isfinite(v))
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be finite");
-  return v;
+  const std::vector<double> v = p.numbers(name, std::vector<double>(def.data(), def.data() + 6), unit, rules, 6);
+  return Eigen::Map<const Vector6d>(v.data());
 }
 
-inline double paramPositive(const ros::NodeHandle& nh, const std::string& name, double def)
+/// ~channels: the non-empty list of channel names (default left, right).
+inline std::vector<std::string> paramChannels(const saras_common::Params& p)
 {
-  const double v = paramDouble(nh, name, def);
-  if (!(v > 0.0))
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be > 0");
-  return v;
-}
-
-inline std::string paramString(const ros::NodeHandle& nh, const std::string& name, const std::string& def)
-{
-  std::string v = def;
-  if (nh.hasParam(name) && !nh.getParam(name, v))
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a string");
-  if (v.empty())
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must not be empty");
-  return v;
-}
-
-/// A list of n finite numbers, or one number used for every entry.
-inline Eigen::VectorXd paramVector(const ros::NodeHandle& nh, const std::string& name, const Eigen::VectorXd& def)
-{
-  if (!nh.hasParam(name))
-    return def;
-  const long n = def.size();
-  std::vector<double> v;
-  double scalar;
-  if (nh.getParam(name, v))
-  {
-    if (static_cast<long>(v.size()) != n)
-      throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must have " + std::to_string(n) +
-                                  " values");
-  }
-  else if (nh.getParam(name, scalar))
-  {
-    v.assign(n, scalar);
-  }
-  else
-  {
-    throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be a list of numbers");
-  }
-  Eigen::VectorXd out(n);
-  for (long i = 0; i < n; ++i)
-  {
-    if (!std::isfinite(v[i]))
-      throw std::invalid_argument("parameter '" + nh.resolveName(name) + "' must be finite");
-    out[i] = v[i];
-  }
-  return out;
-}
-
-inline std::vector<std::string> paramChannels(const ros::NodeHandle& nh)
-{
-  std::vector<std::string> ch{ "left", "right" };
-  if (nh.hasParam("channels") && !nh.getParam("channels", ch))
-    throw std::invalid_argument("parameter '" + nh.resolveName("channels") + "' must be a list of strings");
+  const std::vector<std::string> ch = p.texts("channels", { "left", "right" }, { saras_common::nonEmpty() });
   if (ch.empty())
-    throw std::invalid_argument("parameter '" + nh.resolveName("channels") + "' must not be empty");
+    p.fail("channels", "[]", "", "a non-empty list of channel names");
   return ch;
 }
 

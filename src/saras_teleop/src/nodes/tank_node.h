@@ -37,7 +37,7 @@
 
 #include "node_common.h"
 #include "saras_teleop/energy_tank.h"
-#include "saras_teleop/message_pool.h"
+#include "saras_common/message_pool.h"
 
 namespace saras_teleop
 {
@@ -54,6 +54,7 @@ struct MasterTraits
   static constexpr const char* kOutput = "tank_wrench";
   static constexpr bool kTriggerOnDesired = false;
   static constexpr bool kRequireMeasurement = true;
+  static constexpr const char* kDampingUnit = "N s/m x3, N m s/rad x3";
   static Vector6d desired(const Desired& m) { return toVec(m.wrench); }
   static Vector6d conjugate(const Conjugate& m, double /*sign*/) { return toVec(m.twist); }
   static ros::Time stamp(const Conjugate& m) { return m.header.stamp; }
@@ -71,6 +72,7 @@ struct SlaveTraits
   static constexpr const char* kOutput = "tank_twist";
   static constexpr bool kTriggerOnDesired = true;
   static constexpr bool kRequireMeasurement = false;  // no contact estimator running = free motion
+  static constexpr const char* kDampingUnit = "m/(N s) x3, rad/(N m s) x3";
   static Vector6d desired(const Desired& m) { return toVec(m.twist); }
   /// Effort the tool exerts on the environment = sign * (force of the environment on the tool).
   static Vector6d conjugate(const Conjugate& m, double sign)
@@ -91,23 +93,26 @@ public:
   TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
     : status_(nh, std::string("teleop/") + Traits::kName)
   {
+    using saras_common::nonNegative;
+    using saras_common::positive;
+    const saras_common::Params prm(pnh);
     TankParams p;
-    p.T_init = paramDouble(pnh, "T_init", p.T_init);
-    p.T_max = paramDouble(pnh, "T_max", p.T_max);
-    p.T_min = paramDouble(pnh, "T_min", p.T_min);
-    p.T_req = paramDouble(pnh, "T_req", p.T_req);
-    p.T_ava = paramDouble(pnh, "T_ava", p.T_ava);
-    p.P_const = paramDouble(pnh, "P_const", p.P_const);
-    p.damping_std = paramVector(pnh, "damping_std", p.damping_std);
-    p.damping_max = paramVector(pnh, "damping_max", p.damping_max);
-    pnh.param("bypass", p.bypass, false);
-    const double rate = paramPositive(pnh, "rate", 1000.0);
+    p.T_init = prm.number("T_init", p.T_init, "J", { positive() });
+    p.T_max = prm.number("T_max", p.T_max, "J", { positive() });
+    p.T_min = prm.number("T_min", p.T_min, "J", { positive() });
+    p.T_req = prm.number("T_req", p.T_req, "J", { positive() });
+    p.T_ava = prm.number("T_ava", p.T_ava, "J", { positive() });
+    p.P_const = prm.number("P_const", p.P_const, "W", { nonNegative() });
+    p.damping_std = paramVector6(prm, "damping_std", p.damping_std, Traits::kDampingUnit, { nonNegative() });
+    p.damping_max = paramVector6(prm, "damping_max", p.damping_max, Traits::kDampingUnit, { nonNegative() });
+    p.bypass = prm.flag("bypass", false);
+    const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
-    input_timeout_ = paramPositive(pnh, "input_timeout", 0.1);
-    force_sign_ = paramDouble(pnh, "contact_force_sign", -1.0);
-    pnh.param("require_measurement", require_measurement_, Traits::kRequireMeasurement);
-    const std::vector<std::string> channels = paramChannels(pnh);
-    p.validate();  // throws with the parameter name
+    input_timeout_ = prm.number("input_timeout", 0.1, "s", { positive() });
+    force_sign_ = prm.number("contact_force_sign", -1.0, "", { saras_common::inRange(-1.0, 1.0) });
+    require_measurement_ = prm.flag("require_measurement", Traits::kRequireMeasurement);
+    const std::vector<std::string> channels = paramChannels(prm);
+    p.validate();  // the order of the energy levels (throws naming the parameter)
     tank_.reset(new EnergyTank(p, channels.size()));
     if (p.bypass)
       ROS_WARN("%s: bypass:=true, the energy tank is DISABLED (passivity not guaranteed)", Traits::kName);

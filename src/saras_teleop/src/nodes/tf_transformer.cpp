@@ -27,7 +27,7 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "node_common.h"
-#include "saras_teleop/message_pool.h"
+#include "saras_common/message_pool.h"
 #include "saras_teleop/twist_estimator.h"
 
 namespace saras_teleop
@@ -40,38 +40,30 @@ public:
   /// @param name component name in the heartbeat (node or nodelet name without the leading '/')
   TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
     : buffer_(ros::Duration(5.0))
-    , est_(paramPositive(pnh, "low_pass_cutoff", 50.0), paramPositive(pnh, "max_gap", 0.1))
+    , est_(saras_common::Params(pnh).number("low_pass_cutoff", 50.0, "Hz", { saras_common::positive() }),
+           saras_common::Params(pnh).number("max_gap", 0.1, "s", { saras_common::positive() }))
     , status_(nh, name)
   {
-    reference_ = paramString(pnh, "reference_frame", "mesa_left/sbs_world");
-    tracked_ = paramString(pnh, "tracked_frame", "touch_left/stylus");
-    device_base_ = paramString(pnh, "device_base_frame", "touch_left/base");
+    using saras_common::nonEmpty;
+    using saras_common::positive;
+    const saras_common::Params prm(pnh);
+    reference_ = prm.text("reference_frame", "mesa_left/sbs_world", { nonEmpty() });
+    tracked_ = prm.text("tracked_frame", "touch_left/stylus", { nonEmpty() });
+    device_base_ = prm.text("device_base_frame", "touch_left/base", { nonEmpty() });
     // Dynamic (/tf) transforms kept in the buffer: the tracked frame plus ~extra_dynamic_frames (list
     // of child frame ids, default none: the Touchball receiver publishes the stylus directly under the
     // static device base). Everything else on /tf (the SARAS arms' and the da Vinci's links, several
     // thousand transforms/s) cannot be on the chain and is skipped without touching the buffer.
     dynamic_frames_.insert(tracked_);
-    if (pnh.hasParam("extra_dynamic_frames"))
-    {
-      std::vector<std::string> extra;
-      if (!pnh.getParam("extra_dynamic_frames", extra))
-        throw std::invalid_argument("parameter '" + pnh.resolveName("extra_dynamic_frames") +
-                                    "' must be a list of frame ids");
-      for (const auto& f : extra)
-      {
-        if (f.empty())
-          throw std::invalid_argument("parameter '" + pnh.resolveName("extra_dynamic_frames") +
-                                      "' must not contain empty frame ids");
-        dynamic_frames_.insert(f);
-      }
-    }
-    const double rate = paramPositive(pnh, "rate", 1000.0);
+    for (const std::string& f : prm.texts("extra_dynamic_frames", {}, { nonEmpty() }))
+      dynamic_frames_.insert(f);
+    const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
-    wait_timeout_ = paramPositive(pnh, "wait_timeout", 10.0);
-    stale_timeout_ = paramPositive(pnh, "stale_timeout", 0.05);
-    wrench_timeout_ = paramPositive(pnh, "wrench_timeout", 0.05);
-    max_force_ = paramPositive(pnh, "max_force", 3.3);
-    max_torque_ = paramPositive(pnh, "max_torque", 0.1);
+    wait_timeout_ = prm.number("wait_timeout", 10.0, "s", { positive() });
+    stale_timeout_ = prm.number("stale_timeout", 0.05, "s", { positive() });
+    wrench_timeout_ = prm.number("wrench_timeout", 0.05, "s", { positive() });
+    max_force_ = prm.number("max_force", 3.3, "N", { positive() });
+    max_torque_ = prm.number("max_torque", 0.1, "N m", { positive() });
 
     geometry_msgs::PoseStamped pose;
     geometry_msgs::TwistStamped twist;

@@ -25,7 +25,7 @@
 #include <saras_msgs/HapticDeviceState.h>
 
 #include "node_common.h"
-#include "saras_teleop/message_pool.h"
+#include "saras_common/message_pool.h"
 #include "saras_teleop/transparency.h"
 
 namespace saras_teleop
@@ -39,17 +39,20 @@ public:
   TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
     : status_(nh, "teleop/transparency")
   {
+    using saras_common::nonNegative;
+    using saras_common::positive;
+    const saras_common::Params prm(pnh);
     TransparencyParams p;
-    p.pose_error_gain = paramDouble(pnh, "pose_error_gain", p.pose_error_gain);
-    p.scale_factor = paramDouble(pnh, "scale_factor", p.scale_factor);
-    p.rotation_scale = paramDouble(pnh, "rotation_scale", p.rotation_scale);
-    p.max_force = paramDouble(pnh, "max_force", p.max_force);
+    p.pose_error_gain = prm.number("pose_error_gain", p.pose_error_gain, "N/m", { nonNegative() });
+    p.scale_factor = prm.number("scale_factor", p.scale_factor, "", { positive() });
+    p.rotation_scale = prm.number("rotation_scale", p.rotation_scale, "", { nonNegative() });
+    p.max_force = prm.number("max_force", p.max_force, "N", { positive() });
     p.validate();
-    const double rate = paramPositive(pnh, "rate", 1000.0);
+    const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
-    input_timeout_ = paramPositive(pnh, "input_timeout", 0.1);
-    fixture_timeout_ = paramPositive(pnh, "fixture_timeout", 0.2);
-    const std::vector<std::string> channels = paramChannels(pnh);
+    input_timeout_ = prm.number("input_timeout", 0.1, "s", { positive() });
+    fixture_timeout_ = prm.number("fixture_timeout", 0.2, "s", { positive() });
+    const std::vector<std::string> channels = paramChannels(prm);
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     ch_.resize(channels.size());

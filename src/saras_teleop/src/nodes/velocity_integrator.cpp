@@ -24,7 +24,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "node_common.h"
-#include "saras_teleop/message_pool.h"
+#include "saras_common/message_pool.h"
 #include "saras_teleop/velocity_integrator.h"
 
 namespace saras_teleop
@@ -35,12 +35,18 @@ namespace
 {
 IntegratorParams readParams(const ros::NodeHandle& pnh)
 {
+  const saras_common::Params prm(pnh);
   IntegratorParams p;
-  p.max_linear_velocity = paramDouble(pnh, "max_linear_velocity", p.max_linear_velocity);
-  p.max_angular_velocity = paramDouble(pnh, "max_angular_velocity", p.max_angular_velocity);
-  p.workspace_min = paramVector(pnh, "workspace_min", p.workspace_min);
-  p.workspace_max = paramVector(pnh, "workspace_max", p.workspace_max);
-  p.validate();
+  p.max_linear_velocity = prm.number("max_linear_velocity", p.max_linear_velocity, "m/s", { saras_common::positive() });
+  p.max_angular_velocity =
+      prm.number("max_angular_velocity", p.max_angular_velocity, "rad/s", { saras_common::positive() });
+  const auto box = [&prm](const char* name, const Eigen::Vector3d& def) {
+    const std::vector<double> v = prm.numbers(name, { def.x(), def.y(), def.z() }, "m", {}, 3);
+    return Eigen::Vector3d(v[0], v[1], v[2]);
+  };
+  p.workspace_min = box("workspace_min", p.workspace_min);
+  p.workspace_max = box("workspace_max", p.workspace_max);
+  p.validate();  // min < max (throws naming the parameter)
   return p;
 }
 }  // namespace
@@ -52,22 +58,20 @@ public:
   VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
     : vi_(readParams(pnh)), status_(nh, name)
   {
-    const double rate = paramPositive(pnh, "rate", 1000.0);
+    using saras_common::positive;
+    const saras_common::Params prm(pnh);
+    const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
-    start_timeout_ = paramPositive(pnh, "start_timeout", 10.0);
-    input_timeout_ = paramPositive(pnh, "input_timeout", 0.05);
-    max_step_ = paramPositive(pnh, "max_step", 0.05);
-    frame_ = paramString(pnh, "frame_id", "mesa_left/sbs_world");
+    start_timeout_ = prm.number("start_timeout", 10.0, "s", { positive() });
+    input_timeout_ = prm.number("input_timeout", 0.05, "s", { positive() });
+    max_step_ = prm.number("max_step", 0.05, "s", { positive() });
+    frame_ = prm.text("frame_id", "mesa_left/sbs_world", { saras_common::nonEmpty() });
     tf_.header.frame_id = frame_;
     geometry_msgs::PoseStamped pose;
     pose.header.frame_id = frame_;
     pose_pool_.reset(new MessagePool<geometry_msgs::PoseStamped>(kPoolSize, pose));
-    tf_.child_frame_id = paramString(pnh, "setpoint_frame", "mesa_left/setpoint");
-    int dec = 10;
-    pnh.param("tf_decimation", dec, 10);
-    if (dec < 1)
-      throw std::invalid_argument("parameter '" + pnh.resolveName("tf_decimation") + "' must be >= 1");
-    tf_decimation_ = static_cast<unsigned>(dec);
+    tf_.child_frame_id = prm.text("setpoint_frame", "mesa_left/setpoint", { saras_common::nonEmpty() });
+    tf_decimation_ = static_cast<unsigned>(prm.integer("tf_decimation", 10, "set-points", { saras_common::atLeast(1) }));
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", kStreamQueue);
