@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -25,10 +26,9 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <saras_msgs/HapticDeviceState.h>
-
-#include "../src/nodes/node_common.h"
 
 namespace saras_teleop
 {
@@ -40,9 +40,9 @@ class LatencyRecorder : public nodelet::Nodelet
 
   void onInit() override
   {
-    // ~callback_thread: `own` (default): arrivals are taken on a thread of its own (one wake-up
-    // per observation), not through the manager's two-step dispatch, so the recorder adds no
-    // hand-off of the manager to what it measures; `shared`: on the global callback queue, i.e. the
+    // ~callback_thread: `own` (default): arrivals are taken on a thread of its own (a ros::AsyncSpinner
+    // on a private queue: one wake-up per observation), not through the manager's two-step dispatch,
+    // so the recorder adds no hand-off of the manager to what it measures; `shared`: on the global callback queue, i.e. the
     // thread that runs the teleop nodes with callback_thread `shared` (NodeletAdapter): each
     // arrival is then the instant the chain's own executor reaches that output, with no wake-up of
     // the recorder in it.
@@ -53,7 +53,7 @@ class LatencyRecorder : public nodelet::Nodelet
     if (mode != "own" && mode != "shared")
       throw std::invalid_argument("parameter ~callback_thread must be own or shared, got '" + mode + "'");
     own_thread_ = mode == "own";
-    nh.setCallbackQueue(own_thread_ ? thread_.queue() : ros::getGlobalCallbackQueue());
+    nh.setCallbackQueue(own_thread_ ? &queue_ : ros::getGlobalCallbackQueue());
     pnh.param("duration", duration_, 10.0);
     pnh.param("warmup", warmup_, 2.0);
     pnh.param<std::string>("output", output_, "/tmp/teleop_latency_recorder.txt");
@@ -81,13 +81,17 @@ class LatencyRecorder : public nodelet::Nodelet
         "/mesa_left/target_pose", 100,
         [this](const geometry_msgs::PoseStamped::ConstPtr& m) { add(4, m->header.stamp); }, ros::VoidConstPtr(), fast));
     if (own_thread_)
-      thread_.start();
+    {
+      spinner_.reset(new ros::AsyncSpinner(1, &queue_));
+      spinner_->start();
+    }
   }
 
 public:
   ~LatencyRecorder() override
   {
-    thread_.stop();
+    if (spinner_)
+      spinner_->stop();
     std::lock_guard<std::mutex> lock(mutex_);
     if (!done_ && t_first_ > 0.0)  // unloaded before the window ended: write what was recorded
       write();
@@ -182,8 +186,9 @@ private:
   }
 
   std::mutex mutex_;
-  bool own_thread_ = true;                 ///< arrivals on thread_ (else on the global queue)
-  node::DedicatedCallbackThread thread_;  // declared before subs_: destroyed after them
+  bool own_thread_ = true;  ///< arrivals on queue_, served by spinner_ (else on the global queue)
+  ros::CallbackQueue queue_;  // declared before subs_: destroyed after them
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
   std::vector<ros::Subscriber> subs_;
   std::vector<Sample> arrivals_[kHops];
   double duration_ = 10.0, warmup_ = 2.0, t_first_ = 0.0;

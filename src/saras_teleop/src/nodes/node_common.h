@@ -1,6 +1,6 @@
 /**
  * @file node_common.h
- * @brief Shared helpers of the saras_teleop node adapters: validated parameters, message <-> Eigen
+ * @brief Shared helpers of the saras_teleop node adapters: parameter shapes, message <-> Eigen
  *        conversions, the ComponentStatus heartbeat, the nodelet wrapper.
  */
 #ifndef SARAS_TELEOP_NODE_COMMON_H
@@ -12,7 +12,6 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <geometry_msgs/Pose.h>
@@ -128,97 +127,40 @@ private:
 };
 
 /**
- * A callback queue served by one thread of its own. A nodelet's own queue is served by the nodelet
- * manager in two steps (nodelet::detail::CallbackQueueManager: the queue notifies the manager
- * thread, which hands it to a worker thread), i.e. two thread wake-ups per intra-process hop; a
- * subscription on this queue wakes exactly one thread, the one that runs the callback. The thread
- * inherits the scheduling policy of its creator (the manager's, e.g. SCHED_FIFO under chrt).
- * Callbacks of one queue never run concurrently.
- */
-class DedicatedCallbackThread
-{
-public:
-  DedicatedCallbackThread() = default;
-  DedicatedCallbackThread(const DedicatedCallbackThread&) = delete;
-  DedicatedCallbackThread& operator=(const DedicatedCallbackThread&) = delete;
-  ~DedicatedCallbackThread() { stop(); }
-
-  ros::CallbackQueue* queue() { return &queue_; }
-
-  /// Start serving the queue (idempotent).
-  void start()
-  {
-    if (thread_.joinable())
-      return;
-    running_ = true;
-    thread_ = std::thread([this] {
-      while (running_ && ros::ok())
-        queue_.callAvailable(ros::WallDuration(kWait));
-    });
-  }
-
-  /// Stop and join the thread (callbacks already queued are dropped by the queue's destructor).
-  void stop()
-  {
-    running_ = false;
-    if (thread_.joinable())
-      thread_.join();
-  }
-
-private:
-  static constexpr double kWait = 0.1;  ///< [s] longest wait for a callback before re-checking running_
-  ros::CallbackQueue queue_;
-  std::atomic<bool> running_{ false };
-  std::thread thread_;
-};
-
-/**
  * Nodelet wrapper of a node class `Node(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)`.
  * The node object lives as long as the nodelet; its callbacks (subscriptions and timers) never run
  * concurrently, so the node class needs no locking. Which thread runs them is the parameter
  * `callback_thread` (string, read once; the private `~callback_thread`, else the nearest one up the
  * namespace tree, NodeHandle::searchParam, so a launch file sets it once for a group of nodelets):
- *   - `manager` (default): the nodelet's single-threaded queue, served by the manager's worker threads
- *     (nodelet::detail::CallbackQueueManager: two thread wake-ups per intra-process hop);
- *   - `own`: a DedicatedCallbackThread of this nodelet (one wake-up per hop);
- *   - `shared`: the process's global callback queue (ros::getGlobalCallbackQueue()), which the nodelet
- *     manager's main thread serves with ros::spin(): every nodelet with `shared` runs on that one thread,
- *     so a message published from one of their callbacks is handled by the next, right after the
- *     current callback returns, without any thread wake-up; the hops of a chain of such nodelets cost
- *     no context switch. (The manager's load/unload services share that thread.)
- * A std::exception
- * from the constructor (bad parameter) is logged with ROS_FATAL naming the nodelet and rethrown:
- * the manager refuses the nodelet and the loader (`nodelet load` or the standalone executable)
- * exits non-zero.
+ *   - `shared` (default): the process's global callback queue (ros::getGlobalCallbackQueue()), which
+ *     the nodelet manager's main thread (and `nodelet standalone`) serves with ros::spin(): every
+ *     nodelet with `shared` runs on that one thread, so a message published from one of their
+ *     callbacks is handled by the next right after the current callback returns, without a thread
+ *     wake-up; the hops of a chain of such nodelets cost no context switch. (The manager's load/unload
+ *     services share that thread.)
+ *   - `manager`: the nodelet's single-threaded queue, served by the manager's worker threads
+ *     (nodelet::detail::CallbackQueueManager: two thread wake-ups per intra-process hop).
+ * A std::exception from the constructor (bad parameter) is logged with ROS_FATAL naming the nodelet
+ * and rethrown: the manager refuses the nodelet and `nodelet load` / `nodelet standalone` exit non-zero.
  */
 template <class Node>
 class NodeletAdapter : public nodelet::Nodelet
 {
 public:
-  ~NodeletAdapter() override
-  {
-    thread_.stop();  // no callback runs while the node is destroyed (it unsubscribes)
-    node_.reset();
-  }
+  ~NodeletAdapter() override { node_.reset(); }
 
 private:
   void onInit() override
   {
     try
     {
-      const std::string mode = callbackThreadParam();
       ros::NodeHandle nh = getNodeHandle(), pnh = getPrivateNodeHandle();
-      ros::CallbackQueue* queue = mode == "own"    ? thread_.queue() :
-                                  mode == "shared" ? ros::getGlobalCallbackQueue() :
-                                                     nullptr;
-      if (queue != nullptr)
+      if (callbackThreadParam() == "shared")
       {
-        nh.setCallbackQueue(queue);
-        pnh.setCallbackQueue(queue);
+        nh.setCallbackQueue(ros::getGlobalCallbackQueue());
+        pnh.setCallbackQueue(ros::getGlobalCallbackQueue());
       }
       node_.reset(new Node(nh, pnh, getName().substr(getName().empty() ? 0 : 1)));
-      if (mode == "own")
-        thread_.start();
     }
     catch (const std::exception& e)
     {
@@ -229,16 +171,12 @@ private:
   /// The `callback_thread` parameter (see the class comment), validated.
   std::string callbackThreadParam()
   {
-    ros::NodeHandle& pnh = getPrivateNodeHandle();
-    std::string key, mode = "manager";
-    if (!pnh.searchParam("callback_thread", key))
-      return mode;
-    if (!pnh.getParam(key, mode) || (mode != "manager" && mode != "own" && mode != "shared"))
-      throw std::invalid_argument("parameter '" + key + "' must be one of the strings manager, own, shared");
-    return mode;
+    std::string key;
+    if (!getPrivateNodeHandle().searchParam("callback_thread", key))
+      return "shared";
+    return saras_common::Params(ros::NodeHandle()).text(key, "shared", { saras_common::oneOf({ "shared", "manager" }) });
   }
 
-  DedicatedCallbackThread thread_;  // declared before node_: destroyed after it
   std::unique_ptr<Node> node_;
 };
 

@@ -304,13 +304,15 @@ class TeleopLoopTest(unittest.TestCase):
         else:
             self.assertLess(main_share, 0.1, used)
         # an unknown value is a startup error naming the parameter
-        p = subprocess.run(['rosrun', 'saras_teleop', 'tank_master', '__name:=bad_thread', '_callback_thread:=bogus'],
+        p = subprocess.run(['rosrun', 'nodelet', 'nodelet', 'standalone', 'saras_teleop/TankMaster', '__name:=bad_thread',
+                            '_callback_thread:=own'],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=20)
         self.assertNotEqual(p.returncode, 0)
         self.assertIn('callback_thread', p.stdout.decode(errors='replace'))
 
     def test_bad_parameter_exits_with_message(self):
-        p = subprocess.run(['rosrun', 'saras_teleop', 'tank_master', '__name:=bad_tank', '_T_req:=0.5'],
+        p = subprocess.run(['rosrun', 'nodelet', 'nodelet', 'standalone', 'saras_teleop/TankMaster', '__name:=bad_tank',
+                            '_T_req:=0.5'],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=20)
         out = p.stdout.decode(errors='replace')
         self.assertNotEqual(p.returncode, 0)
