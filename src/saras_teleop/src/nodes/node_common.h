@@ -1,13 +1,14 @@
 /**
  * @file node_common.h
  * @brief Shared helpers of the saras_teleop node adapters: parameter shapes, message <-> Eigen
- *        conversions, the ComponentStatus heartbeat, the nodelet wrapper.
+ *        conversions, health on /diagnostics, the nodelet wrapper.
  */
 #ifndef SARAS_TELEOP_NODE_COMMON_H
 #define SARAS_TELEOP_NODE_COMMON_H
 
-#include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <stdexcept>
@@ -20,7 +21,7 @@
 #include <nodelet/nodelet.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
-#include <saras_msgs/ComponentStatus.h>
+#include <diagnostic_updater/diagnostic_updater.h>
 
 #include "saras_common/message_pool.h"
 #include "saras_common/params.h"
@@ -89,41 +90,53 @@ inline void fromVec(const Vector6d& v, geometry_msgs::Wrench& w)
   w.torque.z = v[5];
 }
 
-/// Heartbeat on /saras/status: 1 Hz and immediately when the level changes.
-class StatusReporter
+/**
+ * Health of a teleop node on /diagnostics (diagnostic_updater, hardware_id `teleoperation`): one status
+ * "<node name>: <task>", filled by @p fill every ~diagnostic_period (default 1 s). The update runs on
+ * a timer of the node's own NodeHandle, i.e. on the node's serialised callback queue: it never runs
+ * concurrently with the node's callbacks, so @p fill reads their state and counters without locks,
+ * and the control callbacks only increment counters (no allocation, no status work at control rate).
+ */
+class Health
 {
 public:
-  StatusReporter(ros::NodeHandle& nh, const std::string& component) : component_(component)
+  using Fill = std::function<void(diagnostic_updater::DiagnosticStatusWrapper&)>;
+
+  /// @param name node name without the leading '/' (the status name starts with it)
+  Health(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name, const std::string& task, const Fill& fill)
+    : updater_(nh, pnh, "/" + name)
   {
-    pub_ = nh.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
-    msg_.component = component;
-  }
-  /// Update the state; publishes if the level changed or a second has passed since the last heartbeat.
-  void update(uint8_t level, const std::string& message, double input_age, uint64_t received, uint64_t rejected)
-  {
-    const ros::Time now = ros::Time::now();
-    const bool changed = level != msg_.level || !published_;
-    msg_.level = level;
-    if (changed || message != msg_.message)
-      msg_.message = message;
-    msg_.input_age = input_age;
-    msg_.received = received;
-    msg_.rejected = rejected;
-    if (changed || (now - last_).toSec() >= 1.0)
-    {
-      msg_.header.stamp = now;
-      pub_.publish(msg_);
-      last_ = now;
-      published_ = true;
-    }
+    updater_.setHardwareID("teleoperation");
+    updater_.add(task, fill);
+    timer_ = nh.createSteadyTimer(ros::WallDuration(updater_.getPeriod()), &Health::onTimer, this);
   }
 
 private:
-  std::string component_;
-  ros::Publisher pub_;
-  saras_msgs::ComponentStatus msg_;
-  ros::Time last_;
-  bool published_ = false;
+  void onTimer(const ros::SteadyTimerEvent&) { updater_.force_update(); }
+
+  diagnostic_updater::Updater updater_;
+  ros::SteadyTimer timer_;
+};
+
+/// Messages per second between two diagnostics updates: count() on the control path, rate() in the update.
+class RateMeter
+{
+public:
+  void count() { ++n_; }
+  /// [Hz] since the previous call (0 on the first)
+  double rate()
+  {
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_.isZero() ? 0.0 : (now - last_).toSec();
+    const double r = dt > 0.0 ? static_cast<double>(n_ - n_last_) / dt : 0.0;
+    last_ = now;
+    n_last_ = n_;
+    return r;
+  }
+
+private:
+  std::uint64_t n_ = 0, n_last_ = 0;
+  ros::WallTime last_;
 };
 
 /**

@@ -89,9 +89,8 @@ template <class Traits>
 class TankNode
 {
 public:
-  /// @param name node or nodelet name (the heartbeat component stays "teleop/<tank_master|tank_slave>")
-  TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
-    : status_(nh, std::string("teleop/") + Traits::kName)
+  /// @param name node or nodelet name (the /diagnostics status is "<name>: energy tank")
+  TankNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
   {
     using saras_common::nonNegative;
     using saras_common::positive;
@@ -142,6 +141,8 @@ public:
     energy_pub_ = nh.advertise<std_msgs::Float64>("energy", kStreamQueue);
     last_step_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TankNode::onTimer, this);
+    health_.reset(new Health(nh, pnh, name, "energy tank",
+                             [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
     ROS_INFO("%s: %zu channel(s), T_init %.2f J, rate %.0f Hz", Traits::kName, channels.size(), p.T_init, rate);
   }
 
@@ -255,6 +256,7 @@ private:
     out->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
     Traits::fill(tank_->output(i), *out);
     pt.pub.publish(out);
+    published_.count();
   }
 
   void stepAndPublish(std::size_t i)
@@ -288,25 +290,32 @@ private:
     ereq_pub_.publish(ereq_msg_);
     energy_msg_.data = tank_->energy();
     energy_pub_.publish(energy_msg_);
+  }
 
-    uint8_t level = saras_msgs::ComponentStatus::OK;
-    std::string msg = "tank ok";
+  /// /diagnostics (Health, 1 Hz): level and message as below, energies and counters as key/values.
+  void report(diagnostic_updater::DiagnosticStatusWrapper& s)
+  {
+    using diagnostic_msgs::DiagnosticStatus;
     if (stale_ && require_measurement_)
-    {
-      level = saras_msgs::ComponentStatus::STALE;
-      msg = "measurement inputs stale: actions zeroed";
-    }
+      s.summary(DiagnosticStatus::STALE, "measurement inputs stale: actions zeroed");
     else if (stale_)
-    {
-      level = saras_msgs::ComponentStatus::WARN;
-      msg = "no interaction-force measurement: assuming free motion";
-    }
+      s.summary(DiagnosticStatus::WARN, "no interaction-force measurement: assuming free motion");
     else if (tank_->energy() < tank_->params().T_req)
-    {
-      level = saras_msgs::ComponentStatus::WARN;
-      msg = "tank low: set-points reduced";
-    }
-    status_.update(level, msg, 0.0, received_, rejected_);
+      s.summary(DiagnosticStatus::WARN, "tank low: set-points reduced");
+    else
+      s.summary(DiagnosticStatus::OK, "tank ok");
+    const TankParams& p = tank_->params();
+    s.add("energy [J]", tank_->energy());
+    s.add("T_min [J]", p.T_min);
+    s.add("T_req [J]", p.T_req);
+    s.add("T_max [J]", p.T_max);
+    s.add("set-point reduction KE", tank_->info().KE);
+    s.add("energy request (ereq)", tank_->ereq());
+    s.add("peer energy request (ext_ereq)", ext_ereq_);
+    s.add("bypass", p.bypass);
+    s.add("output rate [Hz]", published_.rate());
+    s.add("received", received_);
+    s.add("rejected", rejected_);
   }
 
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
@@ -317,7 +326,8 @@ private:
   ros::SteadyTimer timer_;
   std_msgs::Float32 pout_msg_, ereq_msg_;
   std_msgs::Float64 energy_msg_;
-  StatusReporter status_;
+  std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
+  RateMeter published_;             // outputs on the channels' tank_wrench / tank_twist
   double period_ = 0.001, input_timeout_ = 0.1, force_sign_ = -1.0;
   double inbox_ = 0.0, outbox_ = 0.0, ext_ereq_ = 0.0;
   ros::Time last_step_, last_trigger_;

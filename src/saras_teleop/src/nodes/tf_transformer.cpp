@@ -37,12 +37,11 @@ namespace node
 class TfTransformerNode
 {
 public:
-  /// @param name component name in the heartbeat (node or nodelet name without the leading '/')
+  /// @param name node or nodelet name without the leading '/' (the /diagnostics status is "<name>: master tracking")
   TfTransformerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
     : buffer_(ros::Duration(5.0))
     , est_(saras_common::Params(pnh).number("low_pass_cutoff", 50.0, "Hz", { saras_common::positive() }),
            saras_common::Params(pnh).number("max_gap", 0.1, "s", { saras_common::positive() }))
-    , status_(nh, name)
   {
     using saras_common::nonEmpty;
     using saras_common::positive;
@@ -82,6 +81,8 @@ public:
     wrench_sub_ = nh.subscribe("tank_wrench", 10, &TfTransformerNode::onWrench, this, fast);
     start_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TfTransformerNode::onTimer, this);
+    health_.reset(new Health(nh, pnh, name, "master tracking",
+                             [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
 
 private:
@@ -193,6 +194,7 @@ private:
     pose->pose.position.z = p.z;
     pose->pose.orientation = q;
     pose_pub_.publish(pose);
+    pose_rate_.count();
     publishTwist(t.header.stamp);
   }
 
@@ -233,6 +235,7 @@ private:
     wrench->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
     fromVec(w, wrench->wrench);
     wrench_pub_.publish(wrench);
+    wrench_rate_.count();
     t_wrench_pub_ = ros::Time::now();
   }
 
@@ -246,13 +249,10 @@ private:
         ROS_ERROR_THROTTLE(wait_timeout_, "tf_transformer: frames %s -> %s -> %s not available after %.1f s "
                                           "(is the touchball receiver running and world_frames published?)",
                            device_base_.c_str(), reference_.c_str(), tracked_.c_str(), (now - start_).toSec());
-        status_.update(saras_msgs::ComponentStatus::ERROR, "waiting for TF " + tracked_ + " in " + reference_,
-                       (now - start_).toSec(), received_, rejected_);
       }
       return;
     }
-    const double age = last_sample_wall_.isZero() ? 1e9 : (now - last_sample_wall_).toSec();
-    const bool stale = age > stale_timeout_;
+    const bool stale = sampleAge(now) > stale_timeout_;
     if (stale && est_.twist().norm() > 0.0)
     {
       est_.clear();
@@ -262,14 +262,39 @@ private:
       w_ref_.setZero();  // no fresh command: no force
     if (t_wrench_pub_.isZero() || (now - t_wrench_pub_).toSec() > 1.5 * period_)
       publishWrench(ros::Time());
-    status_.update(stale ? saras_msgs::ComponentStatus::STALE : saras_msgs::ComponentStatus::OK,
-                   stale ? "no new master sample on TF " + tracked_ : "tracking", std::min(age, 1e6), received_,
-                   rejected_);
+  }
+
+  /// [s] since the last new master sample (1e6 if none yet)
+  double sampleAge(const ros::Time& now) const
+  {
+    return last_sample_wall_.isZero() ? 1e6 : std::min((now - last_sample_wall_).toSec(), 1e6);
+  }
+
+  /// /diagnostics (Health, 1 Hz)
+  void report(diagnostic_updater::DiagnosticStatusWrapper& s)
+  {
+    using diagnostic_msgs::DiagnosticStatus;
+    const ros::Time now = ros::Time::now();
+    const double waited = (now - start_).toSec();
+    if (!have_rotation_)
+      s.summary(waited > wait_timeout_ ? DiagnosticStatus::ERROR : DiagnosticStatus::WARN,
+                "waiting for TF " + tracked_ + " in " + reference_);
+    else if (sampleAge(now) > stale_timeout_)
+      s.summary(DiagnosticStatus::STALE, "no new master sample on TF " + tracked_);
+    else
+      s.summary(DiagnosticStatus::OK, "tracking");
+    s.add("tracked frame", tracked_);
+    s.add("input age [s]", have_rotation_ ? sampleAge(now) : waited);
+    s.add("master_pose rate [Hz]", pose_rate_.rate());
+    s.add("wrench_cmd rate [Hz]", wrench_rate_.rate());
+    s.add("received", received_);
+    s.add("rejected", rejected_);
   }
 
   tf2::BufferCore buffer_;
   TwistEstimator est_;
-  StatusReporter status_;
+  std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
+  RateMeter pose_rate_, wrench_rate_;
   std::string reference_, tracked_, device_base_;
   double period_ = 0.001, wait_timeout_ = 10.0, stale_timeout_ = 0.05, wrench_timeout_ = 0.05;
   double max_force_ = 3.3, max_torque_ = 0.1;

@@ -35,9 +35,8 @@ namespace node
 class TransparencyNode
 {
 public:
-  /// @param name node or nodelet name (the heartbeat component stays "teleop/transparency")
-  TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& /*name*/)
-    : status_(nh, "teleop/transparency")
+  /// @param name node or nodelet name (the /diagnostics status is "<name>: transparency")
+  TransparencyNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
   {
     using saras_common::nonNegative;
     using saras_common::positive;
@@ -93,6 +92,8 @@ public:
     }
     link_sub_ = nh.subscribe("link_status", 10, &TransparencyNode::onLinkStatus, this, fast);
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TransparencyNode::onTimer, this);
+    health_.reset(new Health(nh, pnh, name, "transparency",
+                             [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
 
 private:
@@ -183,6 +184,7 @@ private:
       wrench->header.stamp = st;
       fromVec(w, wrench->wrench);
       c.pub_wrench.publish(wrench);
+      published_.count();
     }
     c.t_last = now;
   }
@@ -190,36 +192,56 @@ private:
   void onTimer(const ros::SteadyTimerEvent&)
   {
     const ros::Time now = ros::Time::now();
-    std::string msg;
-    uint8_t level = saras_msgs::ComponentStatus::OK;
-    double age = 0.0;
     for (std::size_t i = 0; i < ch_.size(); ++i)
     {
       Channel& c = ch_[i];
       if (c.t_last.isZero() || (now - c.t_last).toSec() > 1.5 * period_)
         compute(i, ros::Time(), true);  // master twist stopped: hold (fresh == false) or keep waiting
+    }
+  }
+
+  /// /diagnostics (Health, 1 Hz): the worst channel state sets the level; each channel's state listed.
+  void report(diagnostic_updater::DiagnosticStatusWrapper& s)
+  {
+    using diagnostic_msgs::DiagnosticStatus;
+    const ros::Time now = ros::Time::now();
+    std::string msg;
+    int level = DiagnosticStatus::OK;
+    double age = 0.0;
+    for (const Channel& c : ch_)
+    {
       if (!c.t_master.isZero())
         age = std::max(age, (now - c.t_master).toSec());
+      std::string state = "running";
       if (c.state == TransparencyChannel::WAITING)
       {
-        level = std::max<uint8_t>(level, saras_msgs::ComponentStatus::WARN);
-        msg += c.name + ": waiting for master and slave poses; ";
+        level = std::max<int>(level, DiagnosticStatus::WARN);
+        state = "waiting for master and slave poses";
       }
       else if (c.state == TransparencyChannel::HOLD)
       {
         if (!c.clutch)
-          level = std::max<uint8_t>(level, saras_msgs::ComponentStatus::STALE);
-        msg += c.name + (c.clutch ? ": clutch; " : ": holding (link stale or inputs old); ");
+          level = std::max<int>(level, DiagnosticStatus::STALE);
+        state = c.clutch ? "clutch" : "holding (link stale or inputs old)";
       }
+      if (state != "running")
+        msg += c.name + ": " + state + "; ";
+      s.add(c.name + " state", state);
     }
-    status_.update(level, msg.empty() ? "running" : msg, age, received_, rejected_);
+    s.summary(static_cast<unsigned char>(level), msg.empty() ? "running" : msg);
+    s.add("input age [s]", age);
+    s.add("set-point rate [Hz]", published_.rate());
+    s.add("link ok", link_ok_);
+    s.add("received", received_);
+    s.add("rejected", rejected_);
   }
 
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::vector<Channel> ch_;
   ros::Subscriber link_sub_;
   ros::SteadyTimer timer_;
-  StatusReporter status_;
+  std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
+  RateMeter published_;             // des_twist + des_wrench pairs, all channels
   double period_ = 0.001, input_timeout_ = 0.1, fixture_timeout_ = 0.2;
   bool link_ok_ = true;
   uint64_t received_ = 0, rejected_ = 0;

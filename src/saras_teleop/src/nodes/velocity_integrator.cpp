@@ -54,9 +54,8 @@ IntegratorParams readParams(const ros::NodeHandle& pnh)
 class VelocityIntegratorNode
 {
 public:
-  /// @param name component name in the heartbeat (node or nodelet name without the leading '/')
-  VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name)
-    : vi_(readParams(pnh)), status_(nh, name)
+  /// @param name node or nodelet name without the leading '/' (the /diagnostics status is "<name>: set-point")
+  VelocityIntegratorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& name) : vi_(readParams(pnh))
   {
     using saras_common::positive;
     const saras_common::Params prm(pnh);
@@ -80,6 +79,8 @@ public:
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
     t0_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &VelocityIntegratorNode::onTimer, this);
+    health_.reset(new Health(nh, pnh, name, "set-point",
+                             [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
 
 private:
@@ -143,6 +144,7 @@ private:
     f.M.GetQuaternion(pose->pose.orientation.x, pose->pose.orientation.y, pose->pose.orientation.z,
                       pose->pose.orientation.w);
     pose_pub_.publish(pose);
+    published_.count();
     t_pub_ = ros::Time::now();
     if (++count_ % tf_decimation_ == 0)
     {
@@ -165,7 +167,6 @@ private:
       {
         ROS_ERROR_THROTTLE(start_timeout_, "velocity_integrator: no slave start pose on %s after %.1f s; not commanding",
                            start_sub_.getTopic().c_str(), waited);
-        status_.update(saras_msgs::ComponentStatus::ERROR, "no slave start pose", waited, received_, rejected_);
       }
       return;
     }
@@ -173,14 +174,30 @@ private:
       hold_ = true;  // no twist stream: the set-point is frozen
     if (t_pub_.isZero() || (now - t_pub_).toSec() > 1.5 * period_)
       publish(ros::Time());
-    const double age = t_twist_.isZero() ? 1e6 : (now - t_twist_).toSec();
-    status_.update(hold_ ? saras_msgs::ComponentStatus::STALE : saras_msgs::ComponentStatus::OK,
-                   hold_ ? "holding: master link stale or no twist" : "integrating", std::min(age, 1e6),
-                   received_, rejected_);
+  }
+
+  /// /diagnostics (Health, 1 Hz)
+  void report(diagnostic_updater::DiagnosticStatusWrapper& s)
+  {
+    using diagnostic_msgs::DiagnosticStatus;
+    const ros::Time now = ros::Time::now();
+    if (!vi_.started())
+      s.summary((now - t0_).toSec() > start_timeout_ ? DiagnosticStatus::ERROR : DiagnosticStatus::WARN,
+                "no slave start pose");
+    else if (hold_)
+      s.summary(DiagnosticStatus::STALE, "holding: master link stale or no twist");
+    else
+      s.summary(DiagnosticStatus::OK, "integrating");
+    s.add("input age [s]", t_twist_.isZero() ? 1e6 : std::min((now - t_twist_).toSec(), 1e6));
+    s.add("target_pose rate [Hz]", published_.rate());
+    s.add("link ok", link_ok_);
+    s.add("received", received_);
+    s.add("rejected", rejected_);
   }
 
   VelocityIntegrator vi_;
-  StatusReporter status_;
+  std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
+  RateMeter published_;
   tf2_ros::TransformBroadcaster broadcaster_;
   double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05, max_step_ = 0.05;
   std::string frame_;

@@ -15,6 +15,7 @@ import unittest
 import rospy
 import rostest
 import tf2_ros
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, WrenchStamped
 from saras_msgs.msg import ComponentStatus
 from std_msgs.msg import Float64
@@ -67,7 +68,7 @@ class Fixture(object):
         rospy.Subscriber('/touchball/left/wrench_cmd', WrenchStamped, self.on_wrench, tcp_nodelay=True)
         rospy.Subscriber('/teleop/tank_master/energy', Float64, lambda m: self.on_energy('master', m))
         rospy.Subscriber('/teleop/tank_slave/energy', Float64, lambda m: self.on_energy('slave', m))
-        rospy.Subscriber('/saras/status', ComponentStatus, self.on_status)
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics)
         self.start_pose = PoseStamped()
         self.start_pose.header.frame_id = 'mesa_left/sbs_world'
         self.start_pose.pose.position.x, self.start_pose.pose.position.y, self.start_pose.pose.position.z = 0.3, 0.1, 0.15
@@ -91,9 +92,11 @@ class Fixture(object):
         with self.lock:
             self.energy[side].append(m.data)
 
-    def on_status(self, m):
+    def on_diagnostics(self, m):
+        """(status name, level, hardware_id, key/values) of every status on /diagnostics."""
         with self.lock:
-            self.status.append((m.component, m.level, m.rejected))
+            for s in m.status:
+                self.status.append((s.name, s.level, s.hardware_id, {kv.key: kv.value for kv in s.values}))
 
     def master_x(self, t):
         return AMP * math.sin(2 * math.pi * FREQ * t)
@@ -220,12 +223,26 @@ class TeleopLoopTest(unittest.TestCase):
             last = list(fx.targets[-200:])
             status = list(fx.status)
         self.assertTrue(all(math.isfinite(t[2]) and math.isfinite(t[3]) for t in last))
+        # health on /diagnostics: one status per teleop node ("<node name>: <task>"), hardware_id
+        # teleoperation, the counters of rejected input among its key/values
+        teleop = [s for s in status if s[2] == 'teleoperation']
+        names = {s[0] for s in teleop}
+        for expected in ('teleop/tank_master/tank_master: energy tank', 'teleop/tank_slave/tank_slave: energy tank',
+                         'teleop/transparency: transparency', 'teleop/left/tf_transformer: master tracking',
+                         'teleop/left/velocity_integrator: set-point'):
+            self.assertIn(expected, names)
         rejected = {}
-        for comp, _lvl, rej in status:
-            rejected[comp] = max(rejected.get(comp, 0), rej)
+        for name, _lvl, _hw, values in teleop:
+            if 'rejected' in values:
+                rejected[name] = max(rejected.get(name, 0), int(values['rejected']))
         rospy.loginfo('rejected counters: %s', rejected)
-        self.assertGreater(rejected.get('teleop/tank_slave', 0), 0)
-        self.assertGreater(sum(v for k, v in rejected.items() if k.endswith('/tf_transformer')), 0)
+        self.assertGreater(rejected.get('teleop/tank_slave/tank_slave: energy tank', 0), 0)
+        self.assertGreater(rejected.get('teleop/left/tf_transformer: master tracking', 0), 0)
+        energies = [float(v['energy [J]']) for n, _l, _h, v in teleop if n.endswith('energy tank') and 'energy [J]' in v]
+        self.assertTrue(energies and all(1.0 <= e <= 20.0 for e in energies), energies)
+        rates = [float(v['target_pose rate [Hz]']) for n, _l, _h, v in teleop
+                 if n == 'teleop/left/velocity_integrator: set-point' and 'target_pose rate [Hz]' in v]
+        self.assertGreater(max(rates), 100.0)  # the set-point stream, as counted by the node
 
         # stale master link: the set-point holds although the master keeps moving
         fx.stale = True
