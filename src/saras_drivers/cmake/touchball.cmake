@@ -1,17 +1,16 @@
 # Build rules of the C++ touchball component; included from CMakeLists.txt.
 #   saras_drivers_touchball_core     ROS-agnostic core: protocol v1 decode/encode, link validation,
 #                                    sequence/resync, twist, watchdog deadline, force latch, UDP socket,
-#                                    receive-thread hand-off and health report, parameter validation,
-#                                    Touch IK
-#   saras_drivers_touchball_nodelet  nodelet saras_drivers/TouchballReceiver (nodelet_plugins.xml); as a
-#                                    node: `nodelet standalone saras_drivers/TouchballReceiver`
+#                                    receive-thread hand-off and health report, Touch IK
+#   saras_drivers_touchball_nodelet  nodelet saras_drivers/TouchballReceiver (nodelet_plugins.xml) and its
+#                                    parameter reading (saras_common::Params); as a node:
+#                                    `nodelet standalone saras_drivers/TouchballReceiver`
 find_package(ZLIB REQUIRED)
 
 add_library(${PROJECT_NAME}_touchball_core
   src/touchball/touchball_kinematics.cpp
   src/touchball/touchball_link.cpp
   src/touchball/touchball_protocol.cpp
-  src/touchball/touchball_receiver_config.cpp
   src/touchball/touchball_receiver_core.cpp
   src/touchball/touchball_udp.cpp)
 target_include_directories(${PROJECT_NAME}_touchball_core PUBLIC include)
@@ -43,9 +42,14 @@ if(CATKIN_ENABLE_TESTING)
     test/touchball/test_touchball_core.cpp
     test/touchball/test_touchball_kinematics.cpp
     test/touchball/test_touchball_receiver_core.cpp
-    test/touchball/test_touchball_udp.cpp)
-  target_include_directories(${PROJECT_NAME}_touchball_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${ZLIB_INCLUDE_DIRS})
+    test/touchball/test_touchball_receiver_params.cpp
+    test/touchball/test_touchball_udp.cpp
+    src/touchball/touchball_receiver_params.cpp)
+  target_include_directories(${PROJECT_NAME}_touchball_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${ZLIB_INCLUDE_DIRS}
+    ${catkin_INCLUDE_DIRS})
   target_compile_definitions(${PROJECT_NAME}_touchball_test PRIVATE
     TOUCHBALL_TEST_DATA="${PROJECT_SOURCE_DIR}/test/touchball/data")
-  target_link_libraries(${PROJECT_NAME}_touchball_test ${PROJECT_NAME}_touchball_core ${ZLIB_LIBRARIES})
+  # the parameter test reads through saras_common::Params from a map (no roscore); it needs roscpp's XmlRpc
+  target_link_libraries(${PROJECT_NAME}_touchball_test ${PROJECT_NAME}_touchball_core ${ZLIB_LIBRARIES}
+    ${catkin_LIBRARIES})
 endif()

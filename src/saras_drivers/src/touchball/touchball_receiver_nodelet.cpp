@@ -32,7 +32,9 @@
  * rejection reason (keys: describeHealth() in touchball_receiver_core.h).
  * touch_<side>/joint_states (sensor_msgs/JointState, rviz) at ~joint_states_rate.
  * Header stamps are the receive time (ros::Time::now()). Parameters: config/touchball.yaml (units
- * there); an invalid value is a fatal start-up error naming the parameter.
+ * there), read once by readReceiverConfig (saras_common::Params); an invalid value is a fatal
+ * start-up error naming the parameter (`nodelet standalone` / `nodelet load` exit non-zero).
+ * Per-packet messages come from saras_common::MessagePool (no allocation on the receive path).
  */
 #include <pthread.h>
 #include <sched.h>
@@ -47,7 +49,6 @@
 #include <string>
 #include <thread>
 
-#include <boost/make_shared.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TwistStamped.h>
@@ -55,6 +56,8 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 #include <ros/ros.h>
+#include <saras_common/message_pool.h>
+#include <saras_common/params.h>
 #include <saras_msgs/ComponentStatus.h>
 #include <saras_msgs/HapticDeviceState.h>
 #include <sensor_msgs/JointState.h>
@@ -64,7 +67,7 @@
 #include "saras_drivers/nodelet_namespace.h"
 #include "saras_drivers/touchball_kinematics.h"
 #include "saras_drivers/touchball_receiver_core.h"
-#include "touchball_receiver_params.h"
+#include "saras_drivers/touchball_receiver_params.h"
 #include "saras_drivers/touchball_udp.h"
 
 namespace saras_drivers
@@ -76,7 +79,7 @@ namespace
 constexpr std::size_t kRecvBuffer = 2048;  ///< [bytes] > any packet: oversized datagrams stay detectable
 constexpr double kIdleWake = 0.1;          ///< [s] receive-thread wake-up while STALE (shutdown)
 constexpr double kStuckFactor = 3.0;       ///< stalled receive thread: no packet handled for this x timeout
-constexpr std::size_t kPoolSize = 16;      ///< messages per topic ring (> in-process subscriber backlog)
+constexpr std::size_t kPoolSize = 16;      ///< messages per topic pool (> in-process subscriber backlog)
 
 double monotonic()
 {
@@ -87,38 +90,6 @@ double wallTime()
 {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
-
-/**
- * Ring of preallocated shared messages: next() returns one that nobody else references any more
- * (an in-process subscriber's queue may still hold the previous ones), so it can be overwritten and
- * published zero-copy without allocating. Only if every slot is still held is a new message made.
- * To be replaced by saras_common's message pool (the one real-time pool of the workspace).
- */
-template <class M>
-class SharedRing
-{
-public:
-  explicit SharedRing(const M& prototype) : prototype_(prototype)
-  {
-    for (auto& s : slots_)
-      s = boost::make_shared<M>(prototype);
-  }
-  boost::shared_ptr<M> next()
-  {
-    for (std::size_t k = 0; k < kPoolSize; ++k)
-    {
-      cursor_ = (cursor_ + 1) % kPoolSize;
-      if (slots_[cursor_].unique())
-        return slots_[cursor_];
-    }
-    return slots_[cursor_] = boost::make_shared<M>(prototype_);
-  }
-
-private:
-  M prototype_;
-  std::array<boost::shared_ptr<M>, kPoolSize> slots_;
-  std::size_t cursor_ = 0;
-};
 
 void setRealtime(int prio)
 {
@@ -148,7 +119,7 @@ class TouchballReceiver
 public:
   /// @param ns namespace of the node (absolute, ending in '/'): the topics are <ns>touchball/...
   TouchballReceiver(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& ns, const std::string& name)
-    : cfg_(readReceiverConfig(pnh))
+    : cfg_(readReceiverConfig(saras_common::Params(pnh)))
     , core_(cfg_.link, cfg_.wrench, kStuckFactor)
     , socket_(cfg_.bind_address, cfg_.port)
     , updater_(nh, pnh, name)
@@ -180,10 +151,10 @@ private:
   {
     ros::Publisher pub_state, pub_pose, pub_twist, pub_buttons, pub_js;
     ros::Subscriber sub_wrench;
-    std::unique_ptr<SharedRing<saras_msgs::HapticDeviceState>> state;
-    std::unique_ptr<SharedRing<geometry_msgs::PoseStamped>> pose;
-    std::unique_ptr<SharedRing<geometry_msgs::TwistStamped>> twist;
-    std::unique_ptr<SharedRing<sensor_msgs::Joy>> joy;
+    std::unique_ptr<saras_common::MessagePool<saras_msgs::HapticDeviceState>> state;
+    std::unique_ptr<saras_common::MessagePool<geometry_msgs::PoseStamped>> pose;
+    std::unique_ptr<saras_common::MessagePool<geometry_msgs::TwistStamped>> twist;
+    std::unique_ptr<saras_common::MessagePool<sensor_msgs::Joy>> joy;
     sensor_msgs::JointState js;  ///< joint_states timer only
   };
 
@@ -220,7 +191,7 @@ private:
           tns + "wrench_cmd", 10, [this, i](const geometry_msgs::WrenchStamped::ConstPtr& m) { onWrench(i, *m); },
           ros::VoidConstPtr(), fast);
     }
-    tf_.reset(new SharedRing<tf2_msgs::TFMessage>(tf));
+    tf_.reset(new saras_common::MessagePool<tf2_msgs::TFMessage>(kPoolSize, tf));
     if (cfg_.publish_tf)
       pub_tf_ = nh.advertise<tf2_msgs::TFMessage>("/tf", qs);
     pub_status_ = nh.advertise<saras_msgs::ComponentStatus>(ns + "touchball/status", 10);
@@ -233,18 +204,18 @@ private:
     st.device = kDeviceNames[i];
     st.pose.orientation.w = 1.0;
     st.stale = true;
-    s.state.reset(new SharedRing<saras_msgs::HapticDeviceState>(st));
+    s.state.reset(new saras_common::MessagePool<saras_msgs::HapticDeviceState>(kPoolSize, st));
     geometry_msgs::PoseStamped pose;
     pose.header.frame_id = frames_[i];
-    s.pose.reset(new SharedRing<geometry_msgs::PoseStamped>(pose));
+    s.pose.reset(new saras_common::MessagePool<geometry_msgs::PoseStamped>(kPoolSize, pose));
     geometry_msgs::TwistStamped twist;
     twist.header.frame_id = frames_[i];
-    s.twist.reset(new SharedRing<geometry_msgs::TwistStamped>(twist));
+    s.twist.reset(new saras_common::MessagePool<geometry_msgs::TwistStamped>(kPoolSize, twist));
     sensor_msgs::Joy joy;
     joy.header.frame_id = frames_[i];
     joy.axes.assign(1, 0.0f);
     joy.buttons.assign(2, 0);
-    s.joy.reset(new SharedRing<sensor_msgs::Joy>(joy));
+    s.joy.reset(new saras_common::MessagePool<sensor_msgs::Joy>(kPoolSize, joy));
   }
 
   // ------------------------------------------------------------------ ROS inputs (callback queue)
@@ -488,7 +459,7 @@ private:
   std::mutex status_mutex_;
   std::array<std::string, kDevices> frames_;
   std::array<Side, kDevices> sides_;
-  std::unique_ptr<SharedRing<tf2_msgs::TFMessage>> tf_;
+  std::unique_ptr<saras_common::MessagePool<tf2_msgs::TFMessage>> tf_;
   ros::Publisher pub_tf_, pub_status_;
   ros::SteadyTimer status_timer_, js_timer_;
   // receive thread only:

@@ -1,11 +1,10 @@
 /**
  * @file touchball_receiver_params.cpp
- * @brief Type-checked reading of the receiver parameters (ranges and units: ReceiverConfig::validate).
+ * @brief Reading and validation of the Touchball receiver parameters.
  */
-#include "touchball_receiver_params.h"
+#include "saras_drivers/touchball_receiver_params.h"
 
-#include <stdexcept>
-#include <string>
+#include "saras_drivers/touchball_udp.h"
 
 namespace saras_drivers
 {
@@ -13,82 +12,42 @@ namespace touchball
 {
 namespace
 {
-[[noreturn]] void wrongType(const ros::NodeHandle& pnh, const std::string& name, XmlRpc::XmlRpcValue& x,
-                            const char* expected)
+std::uint32_t address(const saras_common::Params& p, const char* name, const std::string& text)
 {
-  throw std::invalid_argument("parameter " + pnh.resolveName(name) + " = " + x.toXml() + " is invalid: " + expected);
-}
-
-void read(const ros::NodeHandle& pnh, const std::string& name, double& v)
-{
-  XmlRpc::XmlRpcValue x;
-  if (!pnh.getParam(name, x))
-    return;
-  if (x.getType() == XmlRpc::XmlRpcValue::TypeInt)
-    v = static_cast<int>(x);
-  else if (x.getType() == XmlRpc::XmlRpcValue::TypeDouble)
-    v = static_cast<double>(x);
-  else
-    wrongType(pnh, name, x, "a number");
-}
-
-void read(const ros::NodeHandle& pnh, const std::string& name, int& v)
-{
-  XmlRpc::XmlRpcValue x;
-  if (!pnh.getParam(name, x))
-    return;
-  if (x.getType() != XmlRpc::XmlRpcValue::TypeInt)
-    wrongType(pnh, name, x, "an integer");
-  v = static_cast<int>(x);
-}
-
-void read(const ros::NodeHandle& pnh, const std::string& name, bool& v)
-{
-  XmlRpc::XmlRpcValue x;
-  if (!pnh.getParam(name, x))
-    return;
-  if (x.getType() != XmlRpc::XmlRpcValue::TypeBoolean)
-    wrongType(pnh, name, x, "true or false");
-  v = static_cast<bool>(x);
-}
-
-void read(const ros::NodeHandle& pnh, const std::string& name, std::string& v)
-{
-  XmlRpc::XmlRpcValue x;
-  if (!pnh.getParam(name, x))
-    return;
-  if (x.getType() != XmlRpc::XmlRpcValue::TypeString)
-    wrongType(pnh, name, x, "a string");
-  v = static_cast<std::string>(x);
+  std::uint32_t ip = 0;
+  if (!parseIpv4(text, ip))
+    p.fail(name, "'" + text + "'", "", "an IPv4 address");
+  return ip;
 }
 }  // namespace
 
-ReceiverConfig readReceiverConfig(const ros::NodeHandle& pnh)
+ReceiverConfig readReceiverConfig(const saras_common::Params& p)
 {
+  using saras_common::inRange;
+  using saras_common::nonNegative;
+  using saras_common::positive;
   ReceiverConfig c;
-  read(pnh, "bind_address", c.bind_address);
-  read(pnh, "port", c.port);
-  read(pnh, "allowed_source", c.allowed_source);
-  read(pnh, "command_port", c.command_port);
-  read(pnh, "timeout", c.link.timeout);
-  read(pnh, "resync_after", c.link.resync_after);
-  read(pnh, "twist_cutoff_hz", c.link.twist_cutoff_hz);
-  read(pnh, "max_force", c.wrench.max_force);
-  read(pnh, "max_torque", c.wrench.max_torque);
-  read(pnh, "wrench_timeout", c.wrench.wrench_timeout);
-  read(pnh, "status_rate", c.status_rate);
-  read(pnh, "joint_states_rate", c.joint_states_rate);
-  read(pnh, "publish_tf", c.publish_tf);
-  read(pnh, "publish_queue_size", c.publish_queue_size);
-  read(pnh, "realtime_priority", c.realtime_priority);
-  try
-  {
-    c.validate();
-  }
-  catch (const std::invalid_argument& e)
-  {
-    throw std::invalid_argument("parameter " + pnh.getNamespace() + "/" + e.what());
-  }
+  c.bind_address = p.text("bind_address", c.bind_address);
+  address(p, "bind_address", c.bind_address);
+  c.port = p.integer("port", c.port, "", { inRange(0, 65535) });
+  c.allowed_source = p.text("allowed_source", c.allowed_source);
+  c.link.any_source = c.allowed_source.empty() || c.allowed_source == "*";
+  if (!c.link.any_source)
+    c.link.source_ip = address(p, "allowed_source", c.allowed_source);
+  c.command_port = p.integer("command_port", c.command_port, "", { inRange(0, 65535) });
+  c.link.timeout = p.number("timeout", c.link.timeout, "s", { positive() });
+  c.link.resync_after = p.number("resync_after", c.link.resync_after, "s", { positive() });
+  if (c.link.resync_after < c.link.timeout)
+    p.fail("resync_after", c.link.resync_after, "s", ">= ~timeout");
+  c.link.twist_cutoff_hz = p.number("twist_cutoff_hz", c.link.twist_cutoff_hz, "Hz", { nonNegative() });
+  c.wrench.max_force = p.number("max_force", c.wrench.max_force, "N", { nonNegative() });
+  c.wrench.max_torque = p.number("max_torque", c.wrench.max_torque, "N m", { nonNegative() });
+  c.wrench.wrench_timeout = p.number("wrench_timeout", c.wrench.wrench_timeout, "s", { positive() });
+  c.status_rate = p.number("status_rate", c.status_rate, "Hz", { positive() });
+  c.joint_states_rate = p.number("joint_states_rate", c.joint_states_rate, "Hz", { nonNegative() });
+  c.publish_tf = p.flag("publish_tf", c.publish_tf);
+  c.publish_queue_size = p.integer("publish_queue_size", c.publish_queue_size, "", { inRange(0, 100000) });
+  c.realtime_priority = p.integer("realtime_priority", c.realtime_priority, "", { inRange(0, 99) });
   return c;
 }
 

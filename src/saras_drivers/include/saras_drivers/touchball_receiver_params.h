@@ -1,12 +1,14 @@
 /**
- * @file touchball_receiver_config.h
- * @brief Parameters of the Touchball receiver (config/touchball.yaml) and their validation,
- *        ROS-agnostic. Units in brackets.
+ * @file touchball_receiver_params.h
+ * @brief Parameters of the Touchball receiver (config/touchball.yaml), read once and validated
+ *        through saras_common::Params. Units in brackets.
  */
-#ifndef SARAS_DRIVERS_TOUCHBALL_RECEIVER_CONFIG_H
-#define SARAS_DRIVERS_TOUCHBALL_RECEIVER_CONFIG_H
+#ifndef SARAS_DRIVERS_TOUCHBALL_RECEIVER_PARAMS_H
+#define SARAS_DRIVERS_TOUCHBALL_RECEIVER_PARAMS_H
 
 #include <string>
+
+#include <saras_common/params.h>
 
 #include "saras_drivers/touchball_link.h"
 #include "saras_drivers/touchball_receiver_core.h"
@@ -29,15 +31,16 @@ struct ReceiverConfig
   bool publish_tf = true;                    ///< broadcast touch_<side>/base -> stylus
   int publish_queue_size = 0;                ///< outgoing queue per subscriber of the per-packet topics (0 = 100)
   int realtime_priority = 10;                ///< SCHED_FIFO priority of the receive thread (0 = normal)
-
-  /**
-   * Check every value and derive link.any_source / link.source_ip from allowed_source.
-   * @throws std::invalid_argument "<name> = <value> is invalid: <rule> [<unit>]" for the first bad one
-   */
-  void validate();
 };
+
+/**
+ * Read every receiver parameter from @p p (the node's private parameters; absent => default) and
+ * derive link.any_source / link.source_ip from allowed_source.
+ * @throws saras_common::ParamError naming the parameter, its value, unit and rule
+ */
+ReceiverConfig readReceiverConfig(const saras_common::Params& p);
 
 }  // namespace touchball
 }  // namespace saras_drivers
 
-#endif  // SARAS_DRIVERS_TOUCHBALL_RECEIVER_CONFIG_H
+#endif  // SARAS_DRIVERS_TOUCHBALL_RECEIVER_PARAMS_H
