@@ -17,7 +17,48 @@ from saras_drivers import touchball_protocol as tp
 from touchball_fake_console import FakeConsole, LinkDiagnostics
 
 
+def bad_datagrams(good, sent2):
+    """Random, truncated, bit-flipped, wrong-version, NaN, replayed and reordered datagrams, built
+    from the accepted packets `good` (sequence 0-4) and the devices sent with sequence 2."""
+    rng = random.Random(7)
+    bad = []
+    for _ in range(300):
+        bad.append(bytes(rng.getrandbits(8) for _ in range(rng.choice([0, 3, 159, 160, 161, 1000]))))
+    for k in range(0, 160, 9):
+        bad.append(good[-1][:k])
+    for _ in range(100):
+        b = bytearray(good[-1])
+        b[rng.randrange(160)] ^= 1 << rng.randrange(8)
+        bad.append(bytes(b))
+    body = good[-1][:4] + b'\x09' + good[-1][5:-4]
+    bad.append(body + struct.pack('<I', zlib.crc32(body)))
+    nan = good[-1][:20] + struct.pack('<d', float('nan')) + good[-1][28:-4]
+    bad.append(nan + struct.pack('<I', zlib.crc32(nan)))
+    bad += good                                            # replays
+    bad.append(tp.pack_state(2, 0.0, sent2))               # reordered (older sequence)
+    return bad
+
+
 class TestFuzz(unittest.TestCase):
+    def check_rejections(self, v, bad, foreign):
+        """/diagnostics values v after the `bad` datagrams and `foreign` valid foreign ones."""
+        self.assertEqual(v['packets received'], 5)
+        self.assertEqual(v['rejected datagrams'], len(bad) + foreign)
+        reasons = [k for k in v if k.startswith('rejected ') and k not in ('rejected datagrams',
+                                                                           'rejected wrench_cmd')]
+        self.assertEqual(len(reasons), 10, reasons)
+        self.assertEqual(sum(v[k] for k in reasons), len(bad) + foreign)
+        self.assertEqual(v['rejected foreign_source'], foreign)
+        self.assertEqual(v['rejected size'], sum(len(d) != 160 for d in bad))
+        self.assertGreaterEqual(v['rejected crc'], 50)           # most single bit flips
+        self.assertGreaterEqual(v['rejected version'], 1)
+        self.assertGreaterEqual(v['rejected non_finite'], 1)
+        # 5 replays + the reordered packet: the last accepted one replayed is a duplicate, or out of
+        # order if the replays came more than resync_after after it
+        self.assertEqual(v['rejected duplicate'] + v['rejected out_of_order'], 6)
+        self.assertGreaterEqual(v['rejected out_of_order'], 5)
+        self.assertEqual(v['rejected wrench_cmd'], 0)
+
     def test_fuzz(self):
         port, cmd_port = rospy.get_param('~port'), rospy.get_param('~command_port')
         poses = []
@@ -31,22 +72,7 @@ class TestFuzz(unittest.TestCase):
         self.assertEqual(len(poses), 5)
         n_cmd = len(console.commands)
         self.assertEqual(n_cmd, 5)
-        rng = random.Random(7)
-        bad = []
-        for _ in range(300):
-            bad.append(bytes(rng.getrandbits(8) for _ in range(rng.choice([0, 3, 159, 160, 161, 1000]))))
-        for k in range(0, 160, 9):
-            bad.append(good[-1][:k])
-        for _ in range(100):
-            b = bytearray(good[-1])
-            b[rng.randrange(160)] ^= 1 << rng.randrange(8)
-            bad.append(bytes(b))
-        body = good[-1][:4] + b'\x09' + good[-1][5:-4]
-        bad.append(body + struct.pack('<I', zlib.crc32(body)))
-        nan = good[-1][:20] + struct.pack('<d', float('nan')) + good[-1][28:-4]
-        bad.append(nan + struct.pack('<I', zlib.crc32(nan)))
-        bad += good                                            # replays
-        bad.append(tp.pack_state(2, 0.0, console.sent[2]))     # reordered (older sequence)
+        bad = bad_datagrams(good, console.sent[2])
         for data in bad:
             console.send_raw(data)
             time.sleep(0.0005)
@@ -59,22 +85,7 @@ class TestFuzz(unittest.TestCase):
         self.assertEqual(len(foreign.commands), 0)
         _, st, v = diag.fresh()
         self.assertEqual(st.hardware_id, 'console_link')
-        self.assertEqual(v['packets received'], 5)
-        self.assertEqual(v['rejected datagrams'], len(bad) + 20)
-        reasons = [k for k in v if k.startswith('rejected ') and k not in ('rejected datagrams',
-                                                                           'rejected wrench_cmd')]
-        self.assertEqual(len(reasons), 10, reasons)
-        self.assertEqual(sum(v[k] for k in reasons), len(bad) + 20)
-        self.assertEqual(v['rejected foreign_source'], 20)
-        self.assertEqual(v['rejected size'], sum(len(d) != 160 for d in bad))
-        self.assertGreaterEqual(v['rejected crc'], 50)           # most single bit flips
-        self.assertGreaterEqual(v['rejected version'], 1)
-        self.assertGreaterEqual(v['rejected non_finite'], 1)
-        # 5 replays + the reordered packet: the last accepted one replayed is a duplicate, or out of
-        # order if the replays came more than resync_after after it
-        self.assertEqual(v['rejected duplicate'] + v['rejected out_of_order'], 6)
-        self.assertGreaterEqual(v['rejected out_of_order'], 5)
-        self.assertEqual(v['rejected wrench_cmd'], 0)
+        self.check_rejections(v, bad, 20)
         # the link still works afterwards
         console.seq = 100
         console.send(2.0)
