@@ -3,10 +3,13 @@
  * @brief Inverse kinematics of the Touch haptic device (3 actuated arm joints + 3-DOF gimbal),
  *        used by the Touchball receiver for the decimated touch_<side>/joint_states (rviz only).
  *
- * Same model and joint order as saras_description's URDF and its Python kinematics
- * (saras_description.kinematics.touch_ik; the test checks this implementation against values
- * computed by that one): waist (z), shoulder (y), elbow (y), then the gimbal yaw (z), pitch (y),
- * roll (x). Base frame: z up, x away from the user. Units: m, rad.
+ * The reference model is saras_description's forward kinematics
+ * (saras_description.kinematics.touch_handle_in_base, which also generates the Touch URDF); this
+ * is the platform's Touch inverse kinematics. The gtest test/touchball/test_touchball_kinematics.cpp
+ * requires touchIk to invert a table of joint values and poses computed by that reference
+ * (test/touchball/data/touch_fk_table.csv; test_touch_fk_table.py keeps the table current), so a
+ * change on either side fails a test. Joint order: waist (z), shoulder (y), elbow (y), then the
+ * gimbal yaw (z), pitch (y), roll (x). Base frame: z up, x away from the user. Units: m, rad.
  */
 #ifndef SARAS_DRIVERS_TOUCHBALL_KINEMATICS_H
 #define SARAS_DRIVERS_TOUCHBALL_KINEMATICS_H

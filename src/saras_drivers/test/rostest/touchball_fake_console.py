@@ -1,11 +1,60 @@
 """Helpers for the touchball rostests: a fake console that sends protocol packets (the same
-touchball_protocol module as everything else) and records the command packets it gets back."""
+touchball_protocol module as everything else) and records the command packets it gets back, and
+a recorder of the receiver's /diagnostics status."""
 import math
 import socket
 import threading
 import time
 
+import rospy
+from diagnostic_msgs.msg import DiagnosticArray
+
 from saras_drivers import touchball_protocol as tp
+
+#: name of the receiver's status on /diagnostics ("<node name>: <task>")
+DIAGNOSTIC_NAME = 'touchball_receiver: console link'
+
+
+class LinkDiagnostics(object):
+    """Records the receiver's /diagnostics status: a list of (arrival wall time [s], status, values)
+    with values = {key: value}; integers where the value is one."""
+
+    def __init__(self, name=DIAGNOSTIC_NAME):
+        self.name = name
+        self.records = []
+        self.lock = threading.Lock()
+        self.sub = rospy.Subscriber('/diagnostics', DiagnosticArray, self._on, queue_size=100)
+
+    def _on(self, msg):
+        now = time.time()
+        for st in msg.status:
+            if st.name != self.name:
+                continue
+            values = {}
+            for kv in st.values:
+                values[kv.key] = int(kv.value) if kv.value.isdigit() else kv.value
+            with self.lock:
+                self.records.append((now, st, values))
+
+    def wait_for(self, predicate, timeout=10.0, after=None):
+        """The first record (arrival, status, values) arriving after wall time `after` (default: now)
+        for which predicate(status, values) holds; None if none within timeout [s]."""
+        after = time.time() if after is None else after
+        end = time.monotonic() + timeout
+        k = 0
+        while time.monotonic() < end:
+            with self.lock:
+                new = self.records[k:]
+                k = len(self.records)
+            for r in new:
+                if r[0] > after and predicate(r[1], r[2]):
+                    return r
+            time.sleep(0.05)
+        return None
+
+    def fresh(self, timeout=10.0):
+        """The first complete report (with counters) that arrives from now on."""
+        return self.wait_for(lambda st, v: 'packets received' in v, timeout)
 
 
 def device(t, offset=0.0):

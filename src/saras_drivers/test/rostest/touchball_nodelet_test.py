@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """rostest: the receiver nodelet loaded into /teleop/teleop_manager publishes under the contract's
-names (/touchball/<side>/..., /tf, /touchball/status), streams the simulator's packets and is OK."""
+names (/touchball/<side>/..., /tf, /touchball/status), streams the simulator's packets and is OK
+on touchball/status and on /diagnostics (under the nodelet's name, hardware_id console_link)."""
 import sys
 import time
 import unittest
@@ -11,6 +12,8 @@ from geometry_msgs.msg import PoseStamped
 from saras_msgs.msg import ComponentStatus, HapticDeviceState
 from tf2_msgs.msg import TFMessage
 
+from touchball_fake_console import LinkDiagnostics
+
 
 class TestNodelet(unittest.TestCase):
     def test_names_and_stream(self):
@@ -19,6 +22,7 @@ class TestNodelet(unittest.TestCase):
         rospy.Subscriber('/touchball/right/pose', PoseStamped, poses.append, queue_size=1000)
         rospy.Subscriber('/tf', TFMessage, tfs.append, queue_size=1000)
         rospy.Subscriber('/touchball/status', ComponentStatus, status.append, queue_size=100)
+        diag = LinkDiagnostics()
         end = time.monotonic() + 40.0
         while time.monotonic() < end and (len(states) < 100 or not status or status[-1].level != 0):
             time.sleep(0.1)
@@ -35,6 +39,11 @@ class TestNodelet(unittest.TestCase):
         self.assertFalse([t for t in topics if t.startswith('/teleop/touchball')],
                          'receiver topics moved into the manager namespace: %s' % topics)
         self.assertIn('/touch_left/joint_states', topics)
+        ok = diag.wait_for(lambda st, v: st.level == st.OK and v.get('packets received', 0) > 100, timeout=20.0,
+                           after=0.0)
+        self.assertIsNotNone(ok, 'no OK /diagnostics report of %s' % diag.name)
+        self.assertEqual(ok[1].hardware_id, 'console_link')
+        self.assertEqual(ok[1].message, 'streaming')
 
 
 if __name__ == '__main__':

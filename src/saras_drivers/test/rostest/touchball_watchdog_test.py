@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""rostest: the receiver declares the link STALE at ~timeout after the last packet -- never
-before, and within timeout + 2 ms (median of the trials) -- and OK again as soon as packets
-resume.
+"""rostest: the receiver declares the link STALE on touchball/status (the teleoperation's
+link_status) at ~timeout after the last packet -- never before, and within timeout + 2 ms (median
+of the trials) -- and OK again as soon as packets resume; /diagnostics follows (OK while
+streaming, STALE after, every packet counted).
 
 Two clocks are compared, both on this host: the wall time just before the fake console's last
 sendto, and the header stamp of the STALE touchball/status (taken by the receive thread when it
@@ -25,7 +26,7 @@ import rospy
 import rostest
 
 from saras_msgs.msg import ComponentStatus, HapticDeviceState
-from touchball_fake_console import FakeConsole
+from touchball_fake_console import FakeConsole, LinkDiagnostics
 
 TRIALS = 9
 CONTRACT = 0.002        # [s] median STALE detection after timeout
@@ -48,6 +49,7 @@ class TestWatchdog(unittest.TestCase):
         stale_states = []
         rospy.Subscriber('/touchball/left/state', HapticDeviceState,
                          lambda m: m.stale and stale_states.append(time.time()), queue_size=2000)
+        diag = LinkDiagnostics()
         console = FakeConsole(port, rospy.get_param('~command_port'))
         time.sleep(1.0)
         detect, arrive, ages = [], [], []
@@ -100,6 +102,17 @@ class TestWatchdog(unittest.TestCase):
         for x in ages:
             self.assertGreaterEqual(x, timeout)
         self.assertLessEqual(max(detect), timeout + WORST)
+        # /diagnostics: OK reports while streaming, a STALE one after the last trial with every packet
+        final = diag.wait_for(lambda st, v: 'packets received' in v and st.level == st.STALE
+                              and st.message.startswith('no valid packet from 127.0.0.1:'),
+                              after=console.send_wall[-1])
+        self.assertIsNotNone(final, 'no STALE /diagnostics report after the last trial')
+        _, st, v = final
+        self.assertEqual(st.hardware_id, 'console_link')
+        self.assertEqual(v['packets received'], console.seq)
+        self.assertEqual(v['rejected datagrams'], 0)
+        self.assertTrue([r for r in list(diag.records) if r[1].level == r[1].OK and 'packets received' in r[2]],
+                        'no OK /diagnostics report while streaming')
         console.close()
 
 

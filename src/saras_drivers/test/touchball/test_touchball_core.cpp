@@ -3,7 +3,9 @@
  * @brief Core tests of the C++ Touchball receiver (no roscore): protocol decode against packets
  *        encoded by independent paths (bytes produced by the Python reference encoder, and packets
  *        built field by field here with zlib's CRC), validation order, sequence/resync accounting,
- *        twist estimate, watchdog deadline, force latch, Touch IK against the Python reference.
+ *        twist estimate, watchdog deadline, force latch. The other touchball gtests are linked into
+ *        the same executable (test_touchball_kinematics.cpp, test_touchball_receiver_core.cpp,
+ *        test_touchball_udp.cpp).
  */
 #include <gtest/gtest.h>
 #include <zlib.h>
@@ -14,12 +16,11 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Geometry>
-
-#include "saras_drivers/touchball_kinematics.h"
 #include "saras_drivers/touchball_link.h"
+#include "packet_builder.h"
 
 using namespace saras_drivers::touchball;
+using touchball_test::Builder;
 
 namespace
 {
@@ -46,37 +47,6 @@ const std::vector<std::uint8_t> kPythonCommand = {
   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x2c, 0x25, 0xcf, 0xee
-};
-
-/// Test-side encoder (little-endian host assumed, as on every ROS target), CRC from zlib.
-struct Builder
-{
-  std::vector<std::uint8_t> b = std::vector<std::uint8_t>(160, 0);
-  Builder(std::uint32_t seq, double t)
-  {
-    std::memcpy(b.data(), "TBAL", 4);
-    b[4] = 1;
-    b[5] = 1;
-    std::memcpy(&b[8], &seq, 4);
-    std::memcpy(&b[12], &t, 8);
-    for (int d = 0; d < 2; ++d)
-    {
-      const double pos[3] = { -0.1, 0.02 * d, 0.08 }, q[4] = { 0, 0, 0, 1 };
-      std::memcpy(&b[20 + 68 * d], pos, 24);
-      std::memcpy(&b[44 + 68 * d], q, 32);
-    }
-  }
-  Builder& f64(std::size_t off, double v)
-  {
-    std::memcpy(&b[off], &v, 8);
-    return *this;
-  }
-  std::vector<std::uint8_t> done()
-  {
-    const std::uint32_t c = static_cast<std::uint32_t>(::crc32(0L, b.data(), 156));
-    std::memcpy(&b[156], &c, 4);
-    return b;
-  }
 };
 
 LinkParams params()
@@ -338,85 +308,6 @@ TEST(WrenchLatch, ClampAgeAndNaN)
   c = latch.get(2.02);
   EXPECT_FALSE(c.enabled);
   EXPECT_DOUBLE_EQ(c.force[0], 0.0);
-}
-
-namespace
-{
-/// Forward kinematics of the Touch written from the URDF description (independent of touchIk).
-Eigen::Isometry3d touchFk(const std::array<double, 6>& q)
-{
-  const TouchGeometry g;
-  using A = Eigen::AngleAxisd;
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.rotate(A(q[0], Eigen::Vector3d::UnitZ()));
-  t.translate(Eigen::Vector3d(0, 0, g.shoulder_height));
-  t.rotate(A(q[1], Eigen::Vector3d::UnitY()));
-  t.translate(Eigen::Vector3d(-g.upper_arm, 0, 0));
-  t.rotate(A(q[2], Eigen::Vector3d::UnitY()));
-  t.translate(Eigen::Vector3d(0, 0, -g.forearm));
-  t.rotate(A(q[3], Eigen::Vector3d::UnitZ()));
-  t.rotate(A(q[4], Eigen::Vector3d::UnitY()));
-  t.rotate(A(q[5], Eigen::Vector3d::UnitX()));
-  return t;
-}
-}  // namespace
-
-TEST(TouchKinematics, MatchesPythonReference)
-{
-  // saras_description.kinematics.touch_ik(position, quaternion) printed by Python
-  struct Case
-  {
-    double p[3], q[4];
-    bool ok;
-    double j[6];
-  };
-  const Case cases[] = {
-    { { -0.12, 0.0, 0.07 }, { 0, 0, 0, 1 }, true, { 0.0, 0.40731775877761134, -0.4198443978554605, 0.0, 0.012526639077849172, 0.0 } },
-    { { -0.1, 0.05, 0.12 },
-      { 0.10033164253644411, 0.20066328507288822, 0.050165821268222055, 0.9732169326035078 },
-      true,
-      { -0.4636476090008061, 0.8565783874592556, -0.6666663147742025, 0.578877008467196, 0.23301947017812807,
-        0.12319611151366762 } },
-    { { -0.15, -0.03, 0.02 },
-      { 0.0, 0.0, 0.24740395925452296, 0.9689124217106448 },
-      true,
-      { 0.19739555984988075, 0.006857873658346669, 0.14828220725443192, 0.3060587059853199, -0.14803785387301027,
-        -0.04657369967492541 } },
-    { { 0.5, 0, 0 },
-      { 0, 0, 0, 1 },
-      false,
-      { -1.0471975511965976, -0.17453292519943295, 1.2217304763960306, 2.6179938779914944, 1.2793395323170293, 0.0 } },
-  };
-  for (const Case& c : cases)
-  {
-    std::array<double, 6> j;
-    EXPECT_EQ(touchIk(TouchGeometry(), c.p, c.q, j), c.ok);
-    for (int i = 0; i < 6; ++i)
-      EXPECT_NEAR(j[i], c.j[i], 1e-9) << i;
-  }
-}
-
-TEST(TouchKinematics, InverseOfForward)
-{
-  const TouchGeometry g;
-  std::mt19937 rng(3);
-  int checked = 0;
-  for (int k = 0; k < 500; ++k)
-  {
-    std::array<double, 6> q;
-    for (int i = 0; i < 6; ++i)
-      q[i] = std::uniform_real_distribution<double>(g.lower[i] * 0.95, g.upper[i] * 0.95)(rng);
-    const Eigen::Isometry3d t = touchFk(q);
-    const Eigen::Quaterniond r(t.rotation());
-    const double p[3] = { t.translation().x(), t.translation().y(), t.translation().z() };
-    const double qq[4] = { r.x(), r.y(), r.z(), r.w() };
-    std::array<double, 6> j;
-    if (!touchIk(g, p, qq, j))
-      continue;  // the other arm branch may be the one inside the limits
-    ++checked;
-    EXPECT_TRUE(touchFk(j).isApprox(t, 1e-9)) << k;
-  }
-  EXPECT_GT(checked, 400);
 }
 
 int main(int argc, char** argv)
