@@ -12,10 +12,9 @@ at 720p serialised, sent and read by this Python process, which competes for the
 ``recorder`` = ``image_raw/compressed`` and ``camera_info`` only, as in the platform, where the
 raw images go zero-copy to the overlay nodelet in the same manager and the recorder takes the
 compressed stream.
-Each case runs for every renderer of ``--renderers`` (endoscope.launch ``renderer``: cpp = the
-compiled nodelet in endoscope_sim_node, python = the rospy endoscope_sim), in the same run.
+The simulator runs as its own process (nodelet standalone saras_simulation/EndoscopeSim).
 Usage: endoscope_node.py [--duration S] [--warmup S] [--cases 720p30m,1080p30m,...] [--raw-only]
-                         [--renderers cpp,python] [--consumer viewer|recorder]
+                         [--consumer viewer|recorder]
 Case names: <height>p<fps><m|s> (m = ECM moving, s = still). Needs the workspace built
 (scripts/env.sh: saras_drivers, saras_msgs; saras_collision for the bone boxes).
 """
@@ -42,7 +41,6 @@ LAUNCH = """<launch>
     <arg name="width" value="{width}"/>
     <arg name="height" value="{height}"/>
     <arg name="fps" value="{fps}"/>
-    <arg name="renderer" value="{renderer}"/>
   </include>
 </launch>
 """
@@ -141,7 +139,7 @@ def main():
     ap.add_argument('--duration', type=float, default=10.0)
     ap.add_argument('--warmup', type=float, default=3.0)
     ap.add_argument('--cases', default='720p30m,720p30s,1080p30m,1080p30s,720p60m,720p60s,1080p60m,1080p60s')
-    ap.add_argument('--renderers', default='cpp,python')
+    ap.add_argument('--renderers', default='cpp')
     ap.add_argument('--raw-only', action='store_true', help='no compressed subscribers (viewer)')
     ap.add_argument('--consumer', choices=('viewer', 'recorder'), default='viewer',
                     help='viewer: raw + compressed over TCP; recorder: compressed + camera_info only')

@@ -3,8 +3,6 @@
 
 process_time() (this process's CPU, robust to a loaded host: waiting for a core is not counted)
 per packet, best of --repeat runs of --n packets:
-  * receiver core: TouchballLink.accept (source filter, size/magic/version/type/CRC, finiteness,
-    quaternion, sequence, twist of both devices) + pack_command of the reply;
   * decode only: touchball_protocol.decode_state;
   * console simulator tick: command decode + scripted motion + 2 mass-damper models +
     calibration + pack_state (what touchball_console_sim does per 1 kHz period besides I/O).
@@ -18,7 +16,6 @@ import time
 from saras_drivers import touchball_protocol as tp
 from saras_simulation.touchball_console import (ConsoleCalibration, HandDeviceModel, ScriptedMotion,
                                              TouchballConsole)
-from saras_drivers.touchball_link import TouchballLink
 
 
 def best_us(fn, n, repeat):
@@ -41,17 +38,9 @@ def main():
                                [ConsoleCalibration(), ConsoleCalibration()], 0.1)
     packets = [console.packet(console.step(0.001, k * 1e-3), 1000.0 + k * 1e-3) for k in range(n)]
     cmd = tp.pack_command(1, 0.0, (tp.ZERO_COMMAND, tp.ZERO_COMMAND))
-    zero = (tp.ZERO_COMMAND, tp.ZERO_COMMAND)
 
     # getattr: the same script measures an earlier version of the modules (PYTHONPATH overlay)
     decode_state = getattr(tp, 'decode_state', tp.unpack_state)
-
-    def receiver():
-        link = TouchballLink('127.0.0.1')
-        accept = getattr(link, 'accept', link.handle_datagram)
-        for k, data in enumerate(packets):
-            accept(data, '127.0.0.1', k * 1e-3)
-            tp.pack_command(k, 0.0, zero)
 
     def decode():
         for data in packets:
@@ -62,8 +51,7 @@ def main():
             console.handle_command(cmd, k * 1e-3)
             console.packet(console.step(0.001, k * 1e-3), 0.0)
 
-    rows = [('receiver core: accept + command reply', best_us(receiver, n, args.repeat)),
-            ('decode_state (unpack_state before) only', best_us(decode, n, args.repeat)),
+    rows = [('decode_state (unpack_state before) only', best_us(decode, n, args.repeat)),
             ('console simulator tick (no I/O)', best_us(tick, n, args.repeat))]
     print('Touchball cores, CPU per packet (process_time, best of %d x %d); /proc/loadavg %s (%d CPUs)'
           % (args.repeat, n, ' '.join(open('/proc/loadavg').read().split()[:3]), os.cpu_count()))
