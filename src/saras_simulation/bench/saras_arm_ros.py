@@ -61,7 +61,7 @@ LAUNCH = """<launch>
     <arg name="joint_states" value="{rsp_js}"/>
     <arg name="publish_frequency" value="1000"/>
   </include>
-  <include file="$(find saras_drivers)/launch/saras_arm.launch">
+  <include file="$(find saras_simulation)/launch/saras_arm.launch">
     <arg name="side" value="{side}"/>
     <arg name="port" value="{port}"/>
     <arg name="publish_tf" value="{publish_tf}"/>
