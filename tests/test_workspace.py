@@ -10,7 +10,7 @@ import pytest
 WS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGES = sorted(d for d in os.listdir(os.path.join(WS, 'src'))
                   if os.path.exists(os.path.join(WS, 'src', d, 'package.xml')))
-LAYOUT = ['saras_teleop', 'saras_collision', 'saras_visual_feedback', 'saras_drivers',
+LAYOUT = ['saras_teleop', 'saras_collision', 'saras_visual_feedback', 'saras_drivers', 'saras_simulation',
           'saras_description', 'saras_calibration', 'saras_msgs', 'saras_bringup']
 
 

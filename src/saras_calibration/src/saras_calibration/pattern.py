@@ -6,7 +6,7 @@ ids 0-3) centred on a concentric circle of radius 60 mm at 45, 135, 225 and 315 
 by the endoscope).
 
 Pattern frame (OpenCV planar-target convention, identical to the board frame of
-``saras_drivers``' endoscope simulator): origin at the circle centre on the printed surface,
+``saras_simulation``' endoscope simulator): origin at the circle centre on the printed surface,
 x towards dot 0, y towards dot ``n_dots/4``, z *into* the board (a camera looking at the printed
 side looks along +z; printed images are read with x to the right and y downwards). Dot ``k`` is at
 angle ``360 k / n_dots`` deg from x towards y. Marker edges are aligned with the pattern axes;

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: headless stereo calibration of the simulated endoscope (saras_drivers endoscope_sim).
+"""rostest: headless stereo calibration of the simulated endoscope (saras_simulation endoscope_sim).
 
 Moves the endoscope over the simulator's checkerboard (world: centre (0, 0.02, 0.085), face up,
 8x6 inner corners, 8 mm) by broadcasting TF world -> endoscope/{left,right}_optical_frame, then

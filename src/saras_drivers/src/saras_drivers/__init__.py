@@ -1,1 +1,1 @@
-"""SARAS platform drivers and simulators: ROS-agnostic cores (no rospy import here)."""
+"""SARAS platform hardware drivers and the protocol code they share with saras_simulation: ROS-free cores (no rospy import here)."""

@@ -1,115 +1,28 @@
-"""Operating-room microphone sources (D7.2 Section 2.1 recording list), ROS-agnostic.
+"""Operating-room microphone capture (D7.2 Section 2.1 recording list), ROS-free.
 
-* :class:`SpeechLikeSource`: deterministic synthetic speech-like signal: syllables (voiced
-  harmonic series with a jittered pitch of about ``f0`` Hz, shaped by vowel formants, 20 ms
-  raised-cosine attack/release) separated by short and long pauses, over low-level room noise.
-  Chunk-size independent: generating N samples in one call or in many calls gives the same samples.
-* :class:`AlsaCapture`: ALSA capture through ``arecord`` (alsa-utils) in a child process.
-* :func:`alsa_available` / :func:`open_source`: pick ALSA when asked/available, else synthetic.
+* :func:`alsa_available`: ``arecord`` (alsa-utils) on PATH and a capture card listed.
+* :class:`AlsaCapture`: ALSA capture through ``arecord`` in a child process (no Python ALSA binding).
+* :func:`chunk_frames`: validated audio format -> frames per chunk.
 
-All samples are signed 16-bit little-endian (S16LE), mono unless ``channels`` > 1.
+Samples are signed 16-bit little-endian (S16LE), interleaved when ``channels`` > 1.
 """
-import math
 import shutil
 import subprocess
 
 import numpy as np
 
-#: Vowel formants (F1, F2, F3) [Hz] used for the syllables.
-VOWELS = ((730, 1090, 2440), (270, 2290, 3010), (530, 1840, 2480), (570, 840, 2410),
-          (300, 870, 2240), (660, 1720, 2410))
 
-
-class SpeechLikeSource(object):
-    """Synthetic speech-like PCM generator.
-
-    Parameters: ``sample_rate`` [Hz], ``f0`` mean pitch [Hz], ``level`` peak amplitude of speech
-    (fraction of int16 full scale), ``noise_level`` room-noise RMS (fraction of full scale),
-    ``seed`` for reproducibility.
-    """
-
-    name = 'synthetic'
-
-    def __init__(self, sample_rate=16000, f0=130.0, level=0.3, noise_level=0.003, seed=1,
-                 channels=1):
-        if not (8000 <= sample_rate <= 192000 and 50.0 <= f0 <= 400.0 and 0 < level <= 1.0
-                and 0 <= noise_level < 0.5 and channels >= 1):
-            raise ValueError('audio: invalid synthetic source parameters')
-        self.fs = int(sample_rate)
-        self.f0 = float(f0)
-        self.level = float(level)
-        self.noise = float(noise_level)
-        self.channels = int(channels)
-        self._rng = np.random.default_rng(seed)
-        self._noise_rng = np.random.default_rng(seed + 1000)
-        self._phase = 0.0           # fundamental phase [rad]
-        self._seg_left = 0          # samples left in the current segment
-        self._seg_len = 1
-        self._voiced = False
-        self._formants = VOWELS[0]
-        self._pitch = self.f0
-        self._syllables_to_pause = 3
-        self.samples_generated = 0
-
-    def _next_segment(self):
-        r = self._rng
-        if self._voiced:
-            self._voiced = False
-            self._syllables_to_pause -= 1
-            if self._syllables_to_pause <= 0:
-                dur = r.uniform(0.4, 1.0)         # pause between phrases
-                self._syllables_to_pause = int(r.integers(2, 7))
-            else:
-                dur = r.uniform(0.04, 0.12)       # gap between syllables
-        else:
-            self._voiced = True
-            dur = r.uniform(0.12, 0.30)
-            self._formants = VOWELS[int(r.integers(len(VOWELS)))]
-            self._pitch = self.f0 * r.uniform(0.85, 1.2)
-        self._seg_len = max(1, int(dur * self.fs))
-        self._seg_left = self._seg_len
-
-    def _voiced_block(self, n, pos):
-        """n samples of the current syllable starting at offset ``pos`` within it."""
-        k = np.arange(n)
-        idx = pos + k
-        tt = idx / float(self.fs)
-        f = self._pitch * (1.0 + 0.05 * np.sin(2 * math.pi * 5.0 * tt) - 0.15 * idx / self._seg_len)
-        phase = self._phase + np.cumsum(2 * math.pi * f / self.fs)
-        self._phase = float(phase[-1] % (2 * math.pi))
-        out = np.zeros(n)
-        for h in range(1, int(3800 // self._pitch) + 1):
-            fh = h * self._pitch
-            amp = sum(math.exp(-0.5 * ((fh - F) / (60.0 + 0.08 * F)) ** 2) / (1 + i)
-                      for i, F in enumerate(self._formants)) + 0.02
-            out += amp * np.sin(h * phase) / math.sqrt(h)
-        ramp = int(0.02 * self.fs)
-        env = np.minimum(1.0, np.minimum((idx + 1) / ramp, (self._seg_len - idx) / ramp))
-        env = 0.5 - 0.5 * np.cos(math.pi * np.clip(env, 0.0, 1.0))
-        return out * env
-
-    def read(self, frames):
-        """Next ``frames`` frames as int16 array of length frames * channels (interleaved)."""
-        out = np.zeros(frames)
-        i = 0
-        while i < frames:
-            if self._seg_left <= 0:
-                self._next_segment()
-            n = min(frames - i, self._seg_left)
-            if self._voiced:
-                out[i:i + n] = self._voiced_block(n, self._seg_len - self._seg_left)
-            self._seg_left -= n
-            i += n
-        peak_norm = 1.6  # typical peak of the harmonic sum above, keeps speech below level
-        sig = self.level * out / peak_norm + self.noise * self._noise_rng.standard_normal(frames)
-        pcm = np.clip(np.round(sig * 32767.0), -32768, 32767).astype(np.int16)
-        self.samples_generated += frames
-        if self.channels > 1:
-            pcm = np.repeat(pcm, self.channels)
-        return pcm
-
-    def close(self):
-        pass
+def chunk_frames(sample_rate, channels, chunk_ms):
+    """Frames per chunk of ``chunk_ms`` ms; ValueError naming the parameter when out of range."""
+    if not 8000 <= sample_rate <= 192000:
+        raise ValueError('parameter ~sample_rate must be in [8000, 192000] Hz, got %s' % sample_rate)
+    if not 1 <= channels <= 8:
+        raise ValueError('parameter ~channels must be in [1, 8], got %s' % channels)
+    frames = int(round(sample_rate * chunk_ms / 1000.0))
+    if not (1.0 <= chunk_ms <= 1000.0) or frames * 1000.0 != sample_rate * chunk_ms:
+        raise ValueError('parameter ~chunk_ms must be in [1, 1000] ms and give whole samples, got %s'
+                         % chunk_ms)
+    return frames
 
 
 def alsa_available(device='default'):
@@ -158,19 +71,3 @@ class AlsaCapture(object):
                 self.proc.wait(timeout=2.0)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
-
-
-def open_source(mode='auto', device='default', sample_rate=16000, channels=1, **synth_kwargs):
-    """Open the configured source. ``mode``: ``auto`` (ALSA if available else synthetic),
-    ``alsa`` (ALSA or ValueError), ``synthetic``. Returns (source, human-readable reason)."""
-    if mode not in ('auto', 'alsa', 'synthetic'):
-        raise ValueError("parameter source must be 'auto', 'alsa' or 'synthetic', got %r" % mode)
-    if mode in ('auto', 'alsa'):
-        ok, why = alsa_available(device)
-        if ok:
-            return AlsaCapture(device, sample_rate, channels), why
-        if mode == 'alsa':
-            raise ValueError('parameter source=alsa but %s' % why)
-        return SpeechLikeSource(sample_rate, channels=channels, **synth_kwargs), \
-            'synthetic (%s)' % why
-    return SpeechLikeSource(sample_rate, channels=channels, **synth_kwargs), 'synthetic'

@@ -4,7 +4,7 @@
 ~mode:
   nominal    augmented images at the input rate, one output per input, and each tool drawn in its
              region's colour at the pixel OpenCV's cv2.projectPoints predicts (distortion included)
-  rate       only the rate part of nominal (used with the real saras_drivers/endoscope_sim)
+  rate       only the rate part of nominal (used with the real saras_simulation/endoscope_sim)
   reconfigure  dynamic_reconfigure changes thresholds/colours live and refuses invalid requests
   bad_input  malformed images, NaN poses and short distance arrays: the nodelet keeps publishing
              and its heartbeat counts the rejections

@@ -6,7 +6,7 @@ Private parameters: ~rate [Hz] (image rate, default 30), ~bad_input (bool, defau
 true also publishes truncated images, uncalibrated camera_info, NaN poses and short distance
 arrays between good ones),
 ~images (bool, default true: false publishes only TF, poses and distances, for use with the real
-saras_drivers/endoscope_sim).
+saras_simulation/endoscope_sim).
 """
 import math
 

@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""Benchmark: CPU time per packet of the Touchball cores, without ROS or sockets (not a test).
+
+process_time() (this process's CPU, robust to a loaded host: waiting for a core is not counted)
+per packet, best of --repeat runs of --n packets:
+  * decode only: touchball_protocol.decode_state;
+  * console simulator tick: command decode + scripted motion + 2 mass-damper models +
+    calibration + pack_state (what touchball_console_sim does per 1 kHz period besides I/O).
+Usage: touchball_cpu.py [--n N] [--repeat R]   (other arguments of bench/run are ignored)
+"""
+import argparse
+import os
+import sys
+import time
+
+from saras_drivers import touchball_protocol as tp
+from saras_simulation.touchball_console import (ConsoleCalibration, HandDeviceModel, ScriptedMotion,
+                                             TouchballConsole)
+
+
+def best_us(fn, n, repeat):
+    best = float('inf')
+    for _ in range(repeat):
+        t = time.process_time()
+        fn()
+        best = min(best, (time.process_time() - t) / n * 1e6)
+    return best
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument('--n', type=int, default=3000)
+    ap.add_argument('--repeat', type=int, default=5)
+    args, _ = ap.parse_known_args()
+    n = args.n
+    console = TouchballConsole([ScriptedMotion(), ScriptedMotion(phase=2.5)],
+                               [HandDeviceModel(), HandDeviceModel()],
+                               [ConsoleCalibration(), ConsoleCalibration()], 0.1)
+    packets = [console.packet(console.step(0.001, k * 1e-3), 1000.0 + k * 1e-3) for k in range(n)]
+    cmd = tp.pack_command(1, 0.0, (tp.ZERO_COMMAND, tp.ZERO_COMMAND))
+
+    # getattr: the same script measures an earlier version of the modules (PYTHONPATH overlay)
+    decode_state = getattr(tp, 'decode_state', tp.unpack_state)
+
+    def decode():
+        for data in packets:
+            decode_state(data)
+
+    def tick():
+        for k in range(n):
+            console.handle_command(cmd, k * 1e-3)
+            console.packet(console.step(0.001, k * 1e-3), 0.0)
+
+    rows = [('decode_state (unpack_state before) only', best_us(decode, n, args.repeat)),
+            ('console simulator tick (no I/O)', best_us(tick, n, args.repeat))]
+    print('Touchball cores, CPU per packet (process_time, best of %d x %d); /proc/loadavg %s (%d CPUs)'
+          % (args.repeat, n, ' '.join(open('/proc/loadavg').read().split()[:3]), os.cpu_count()))
+    print('| path | CPU per packet [us] | share of one core at 1 kHz [%] |')
+    print('|---|---|---|')
+    for name, us in rows:
+        print('| %s | %.1f | %.1f |' % (name, us, us / 10.0))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,36 @@
+"""Small helpers of the saras_simulation benchmarks (bench/*.py) and tests: a free TCP port for a
+private roscore, the CPU time of a process (Linux /proc) and a built executable of this package."""
+import os
+import socket
+
+
+def free_port():
+    """A TCP port on 127.0.0.1 that was free when asked."""
+    s = socket.socket()
+    s.bind(('127.0.0.1', 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def cpu_seconds(pid):
+    """User + system CPU time [s] of process ``pid``, or None when it is gone."""
+    try:
+        with open('/proc/%d/stat' % pid) as f:
+            fields = f.read().rsplit(')', 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def find_devel_executable(name, package='saras_simulation'):
+    """Path of the built executable ``lib/<package>/<name>`` in ``$DEVEL_DIR`` or, after it, the
+    prefixes of ``$CMAKE_PREFIX_PATH`` (a sourced devel or install space); None when not built."""
+    prefixes = [p for p in os.environ.get('CMAKE_PREFIX_PATH', '').split(':') if p]
+    if os.environ.get('DEVEL_DIR'):
+        prefixes.insert(0, os.environ['DEVEL_DIR'])
+    for p in prefixes:
+        exe = os.path.join(p, 'lib', package, name)
+        if os.access(exe, os.X_OK):
+            return exe
+    return None
