@@ -94,9 +94,6 @@ bool loadConfig(const ros::NodeHandle& pnh, CollidingRegionsConfig& c, std::stri
   pnh.param("marker_rate", c.marker_rate, c.marker_rate);
   if (!std::isfinite(c.marker_rate) || c.marker_rate < 0.0)
     return bad("marker_rate", "must be >= 0 Hz (0 disables the markers)");
-  pnh.param("status_rate", c.status_rate, c.status_rate);
-  if (!positiveFinite(c.status_rate))
-    return bad("status_rate", "must be > 0 Hz");
   pnh.param<std::string>("world_frame", c.world_frame, c.world_frame);
   pnh.param<std::string>("bones_frame", c.bones_frame, c.bones_frame);
   if (c.world_frame.empty())
@@ -144,6 +141,7 @@ CollidingRegions::CollidingRegions(const ros::NodeHandle& nh, const CollidingReg
     return specs;
   }())
   , tools_(config.tools.size())
+  , updater_(nh)
 {
 }
 
@@ -172,7 +170,6 @@ bool CollidingRegions::start(std::string& error)
   distances_pub_ = nh_.advertise<std_msgs::Float64MultiArray>("/collision/distances", 10);
   report_pub_ = nh_.advertise<saras_msgs::CollisionReport>("/collision/report", 10);
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("/collision/markers", 2);
-  status_pub_ = nh_.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
   for (std::size_t i = 0; i < n; ++i)
   {
     tools_[i].frame = config_.tools[i].frame;
@@ -186,10 +183,14 @@ bool CollidingRegions::start(std::string& error)
       tools_[i].wrench.header.frame_id = config_.tools[i].frame;
     }
   }
+  updater_.setHardwareID("collision");
+  min_rate_ = max_rate_ = config_.rate;
+  cycle_rate_.reset(new diagnostic_updater::FrequencyStatus(
+      diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 5), "cycle rate"));
+  updater_.add(*cycle_rate_);
+  updater_.add("inputs", this, &CollidingRegions::inputsDiagnostic);
   start_time_ = ros::WallTime::now();
   cycle_timer_ = nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.rate), &CollidingRegions::cycle, this);
-  status_timer_ =
-      nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.status_rate), &CollidingRegions::statusTimer, this);
   return true;
 }
 
@@ -264,6 +265,7 @@ void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
 {
   const ros::Time now = ros::Time::now();
   ++cycles_;
+  cycle_rate_->tick();
   updateBones();
   const std::size_t n = tools_.size();
   for (std::size_t i = 0; i < n; ++i)
@@ -321,22 +323,26 @@ void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
     last_marker_time_ = wall;
     publishMarkers(now);
   }
-  if (computeLevel(nullptr) != last_level_)  // no allocation on the cycle path
-    publishStatus(now);
+  // Published at ~diagnostic_period (1 s), and at once when the level changes.
+  const uint8_t level = computeLevel(nullptr);  // no allocation on the cycle path
+  if (level != last_level_)
+  {
+    last_level_ = level;
+    updater_.force_update();
+  }
+  else
+  {
+    updater_.update();
+  }
 }
 
-void CollidingRegions::publishMarkers(const ros::Time& now)
+std::size_t CollidingRegions::fillBoxMarkers(const ros::Time& now)
 {
-  if (markers_pub_.getNumSubscribers() == 0)
-    return;
   const std::vector<OrientedBox>& boxes = scene_.boxes();
-  const std::size_t n = tools_.size();
   std::vector<visualization_msgs::Marker>& m = markers_msg_.markers;
-  m.resize(boxes.size() + 2 * n + 1);
-  std::size_t k = 0;
-  for (std::size_t b = 0; b < boxes.size(); ++b, ++k)
+  for (std::size_t b = 0; b < boxes.size(); ++b)
   {
-    visualization_msgs::Marker& mk = m[k];
+    visualization_msgs::Marker& mk = m[b];
     mk.header.frame_id = config_.world_frame;
     mk.header.stamp = now;
     mk.ns = "bones";
@@ -354,6 +360,17 @@ void CollidingRegions::publishMarkers(const ros::Time& now)
     mk.scale.z = 2 * boxes[b].half.z();
     mk.color = color(0.93f, 0.9f, 0.8f, 0.6f);
   }
+  return boxes.size();
+}
+
+void CollidingRegions::publishMarkers(const ros::Time& now)
+{
+  if (markers_pub_.getNumSubscribers() == 0)
+    return;
+  const std::size_t n = tools_.size();
+  std::vector<visualization_msgs::Marker>& m = markers_msg_.markers;
+  m.resize(scene_.boxes().size() + 2 * n + 1);
+  const std::size_t k = fillBoxMarkers(now);
   const std::vector<ToolProximityResult>& results = scene_.results();
   visualization_msgs::Marker& lines = m[k + 2 * n];
   lines.header.frame_id = config_.world_frame;
@@ -413,53 +430,71 @@ void CollidingRegions::publishMarkers(const ros::Time& now)
 
 uint8_t CollidingRegions::computeLevel(std::string* message) const
 {
-  if (!have_bones_)
-  {
-    if (message != nullptr)
-      *message = "no TF " + config_.world_frame + " -> " + config_.bones_frame + ": bones left out";
-    return saras_msgs::ComponentStatus::WARN;
-  }
-  bool all_valid = true;
+  using diagnostic_msgs::DiagnosticStatus;
+  std::size_t valid = 0;
   for (std::size_t i = 0; i < tools_.size(); ++i)
-    all_valid = all_valid && scene_.toolValid(i);
-  if (all_valid)
+    valid += scene_.toolValid(i) ? 1 : 0;
+  if (have_bones_ && valid == tools_.size())
   {
     if (message != nullptr)
       *message = "ok";
-    return saras_msgs::ComponentStatus::OK;
+    return DiagnosticStatus::OK;
   }
+  const bool starting = (ros::WallTime::now() - start_time_).toSec() <= config_.tf_timeout;
+  const uint8_t level = starting ? DiagnosticStatus::WARN : (valid == 0 ? DiagnosticStatus::STALE : DiagnosticStatus::ERROR);
   if (message != nullptr)
   {
     std::string missing;
     for (std::size_t i = 0; i < tools_.size(); ++i)
       if (!scene_.toolValid(i))
         missing += (missing.empty() ? "" : ", ") + config_.tools[i].name;
-    *message = "no valid pose/TF for: " + missing;
+    if (!have_bones_)
+      missing += (missing.empty() ? "" : ", ") + std::string("forbidden regions (no TF ") + config_.world_frame +
+                 " -> " + config_.bones_frame + ")";
+    *message = starting ? "waiting for: " + missing :
+                          (valid == 0 ? "no tool has a current pose, nothing monitored; missing: " :
+                                        "collision monitoring lost for: ") +
+                              missing;
   }
-  return saras_msgs::ComponentStatus::WARN;
+  return level;
 }
 
-void CollidingRegions::publishStatus(const ros::Time& now)
+void CollidingRegions::inputsDiagnostic(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
-  saras_msgs::ComponentStatus s;
-  s.header.stamp = now;
-  s.component = "colliding_regions";
-  s.level = computeLevel(&s.message);
-  last_level_ = s.level;
-  double age = 0.0;
-  for (const ToolState& t : tools_)
-    age = std::max(age, t.have_pose ? (now - t.stamp_rx).toSec() : (ros::WallTime::now() - start_time_).toSec());
-  s.input_age = age;
-  s.received = received_;
-  s.rejected = rejected_;
-  if (tf_failures_ > 0 && s.level != saras_msgs::ComponentStatus::OK)
-    s.message += " (last missing TF frame: " + missing_frame_ + ")";
-  status_pub_.publish(s);
-}
-
-void CollidingRegions::statusTimer(const ros::SteadyTimerEvent&)
-{
-  publishStatus(ros::Time::now());
+  std::string message;
+  const uint8_t level = computeLevel(&message);
+  if (tf_failures_ > 0 && level != diagnostic_msgs::DiagnosticStatus::OK)
+    message += " (last missing TF frame: " + missing_frame_ + ")";
+  status.summary(level, message);
+  const ros::Time now = ros::Time::now();
+  for (std::size_t i = 0; i < tools_.size(); ++i)
+  {
+    const ToolState& t = tools_[i];
+    const std::string key = config_.tools[i].name + " pose age [s]";
+    if (t.have_pose)
+      status.addf(key, "%.3f%s", (now - t.stamp_rx).toSec(), scene_.toolValid(i) ? "" : " (not monitored)");
+    else
+      status.add(key, "no pose received");
+  }
+  status.add("forbidden regions placed", have_bones_);
+  status.add("poses received", received_);
+  status.add("poses rejected (non-finite)", rejected_);
+  status.add("TF lookup failures", tf_failures_);
+  status.add("cycles", cycles_);
+  const std::vector<ToolProximityResult>& results = scene_.results();
+  double closest = std::numeric_limits<double>::infinity();
+  std::string closest_tool;
+  for (std::size_t i = 0; i < results.size() && i < tools_.size(); ++i)
+    if (scene_.toolValid(i) && results[i].distance < closest)
+    {
+      closest = results[i].distance;
+      closest_tool = config_.tools[i].name;
+    }
+  if (!closest_tool.empty())
+  {
+    status.addf("closest distance [m]", "%.6f", closest);
+    status.add("closest tool", closest_tool);
+  }
 }
 
 }  // namespace saras_collision
