@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include <saras_common/params.h>
 #include <tf2_eigen/tf2_eigen.h>
 
 #include "saras_collision/vertices_file.h"
@@ -12,11 +13,6 @@ namespace saras_collision
 namespace
 {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool positiveFinite(double v)
-{
-  return std::isfinite(v) && v > 0.0;
-}
 
 geometry_msgs::Point toPoint(const Eigen::Vector3d& v)
 {
@@ -62,71 +58,66 @@ Eigen::Quaterniond boxOrientation(const Eigen::Matrix3d& axes)
 }
 }  // namespace
 
+namespace
+{
+/// The per-tool parameters under ~tool/<name>/.
+CollidingRegionsConfig::Tool loadTool(const saras_common::Params& p, const std::string& name)
+{
+  using saras_common::nonEmpty;
+  CollidingRegionsConfig::Tool t;
+  t.name = name;
+  const std::string prefix = "tool/" + name + "/";
+  for (const char* required : { "topic", "frame", "trocar_frame", "radius" })
+    if (!p.has(prefix + required))
+      p.fail(prefix + required, "(not set)", "", "set (see config/colliding_regions.yaml)");
+  t.topic = p.text(prefix + "topic", "", { nonEmpty() });  // tool-tip PoseStamped topic
+  t.frame = p.text(prefix + "frame", "", { nonEmpty() });  // frame of the pose when its header has none
+  t.trocar_frame = p.text(prefix + "trocar_frame", "", { nonEmpty() });  // TF frame at the trocar / RCM
+  t.radius = p.number(prefix + "radius", 0.0, "m", { saras_common::inRange(0.0, 0.05) });  // shaft radius
+  t.fixture_topic = p.text(prefix + "fixture_topic", "");
+  return t;
+}
+}  // namespace
+
 bool loadConfig(const ros::NodeHandle& pnh, CollidingRegionsConfig& c, std::string& error)
 {
-  auto bad = [&](const std::string& name, const std::string& why) {
-    error = "parameter ~" + name + " " + why;
-    return false;
-  };
-  pnh.param("rate", c.rate, c.rate);
-  if (!positiveFinite(c.rate) || c.rate > 10000.0)
-    return bad("rate", "must be in (0, 10000] Hz");
-  if (!pnh.getParam("vertices_file", c.vertices_file) || c.vertices_file.empty())
-    return bad("vertices_file", "is required (path of the forbidden-region vertices file)");
-  pnh.param("scaling", c.scaling, c.scaling);
-  if (!positiveFinite(c.scaling))
-    return bad("scaling", "must be a finite number > 0 (file unit -> metres)");
-  pnh.param("vertex_tolerance", c.vertex_tolerance, c.vertex_tolerance);
-  if (!std::isfinite(c.vertex_tolerance) || c.vertex_tolerance < 0.0 || c.vertex_tolerance > 0.1)
-    return bad("vertex_tolerance", "must be in [0, 0.1] (relative)");
-  pnh.param("thresholds/collision", c.collision_threshold, c.collision_threshold);
-  pnh.param("thresholds/warning", c.warning_threshold, c.warning_threshold);
-  if (!std::isfinite(c.collision_threshold) || c.collision_threshold < 0.0)
-    return bad("thresholds/collision", "must be a finite distance >= 0 m");
-  if (!std::isfinite(c.warning_threshold) || c.warning_threshold <= c.collision_threshold)
-    return bad("thresholds/warning", "must be a finite distance > thresholds/collision (m)");
-  pnh.param("tf_timeout", c.tf_timeout, c.tf_timeout);
-  if (!positiveFinite(c.tf_timeout))
-    return bad("tf_timeout", "must be > 0 s");
-  pnh.param("pose_timeout", c.pose_timeout, c.pose_timeout);
-  if (!positiveFinite(c.pose_timeout))
-    return bad("pose_timeout", "must be > 0 s");
-  pnh.param("marker_rate", c.marker_rate, c.marker_rate);
-  if (!std::isfinite(c.marker_rate) || c.marker_rate < 0.0)
-    return bad("marker_rate", "must be >= 0 Hz (0 disables the markers)");
-  pnh.param<std::string>("world_frame", c.world_frame, c.world_frame);
-  pnh.param<std::string>("bones_frame", c.bones_frame, c.bones_frame);
-  if (c.world_frame.empty())
-    return bad("world_frame", "must not be empty");
-  if (c.bones_frame.empty())
-    return bad("bones_frame", "must not be empty");
-  pnh.param("fixture/enabled", c.fixture_enabled, c.fixture_enabled);
-  pnh.param("fixture/stiffness", c.fixture_stiffness, c.fixture_stiffness);
-  pnh.param("fixture/max_force", c.fixture_max_force, c.fixture_max_force);
-  if (!std::isfinite(c.fixture_stiffness) || c.fixture_stiffness < 0.0)
-    return bad("fixture/stiffness", "must be >= 0 N/m");
-  if (!std::isfinite(c.fixture_max_force) || c.fixture_max_force < 0.0)
-    return bad("fixture/max_force", "must be >= 0 N");
-
-  std::vector<std::string> names;
-  if (!pnh.getParam("tools", names) || names.empty())
-    return bad("tools", "must be a non-empty list of tool names (order of /collision/distances)");
-  c.tools.clear();
-  for (const std::string& name : names)
+  using saras_common::inRange;
+  using saras_common::nonEmpty;
+  using saras_common::nonNegative;
+  using saras_common::positive;
+  try
   {
-    CollidingRegionsConfig::Tool t;
-    t.name = name;
-    const std::string p = "tool/" + name + "/";
-    if (!pnh.getParam(p + "topic", t.topic) || t.topic.empty())
-      return bad(p + "topic", "is required (tool-tip PoseStamped topic)");
-    if (!pnh.getParam(p + "frame", t.frame) || t.frame.empty())
-      return bad(p + "frame", "is required (frame of the tool-tip pose)");
-    if (!pnh.getParam(p + "trocar_frame", t.trocar_frame) || t.trocar_frame.empty())
-      return bad(p + "trocar_frame", "is required (TF frame at the trocar / RCM)");
-    if (!pnh.getParam(p + "radius", t.radius) || !std::isfinite(t.radius) || t.radius < 0.0 || t.radius > 0.05)
-      return bad(p + "radius", "is required, in [0, 0.05] m (instrument shaft radius)");
-    pnh.param<std::string>(p + "fixture_topic", t.fixture_topic, "");
-    c.tools.push_back(t);
+    const saras_common::Params p(pnh);
+    c.rate = p.number("rate", c.rate, "Hz", { positive(), saras_common::atMost(10000.0) });
+    if (!p.has("vertices_file"))
+      p.fail("vertices_file", "(not set)", "", "the path of the forbidden-region vertices file");
+    c.vertices_file = p.text("vertices_file", "", { nonEmpty() });
+    c.scaling = p.number("scaling", c.scaling, "file unit -> m", { positive() });
+    c.vertex_tolerance = p.number("vertex_tolerance", c.vertex_tolerance, "", { inRange(0.0, 0.1) });
+    c.collision_threshold = p.number("thresholds/collision", c.collision_threshold, "m", { nonNegative() });
+    c.warning_threshold = p.number("thresholds/warning", c.warning_threshold, "m");
+    if (!(c.warning_threshold > c.collision_threshold))
+      p.fail("thresholds/warning", c.warning_threshold, "m", "> thresholds/collision");
+    c.tf_timeout = p.number("tf_timeout", c.tf_timeout, "s", { positive() });
+    c.pose_timeout = p.number("pose_timeout", c.pose_timeout, "s", { positive() });
+    c.marker_rate = p.number("marker_rate", c.marker_rate, "Hz (0: off)", { nonNegative() });
+    c.world_frame = p.text("world_frame", c.world_frame, { nonEmpty() });
+    c.bones_frame = p.text("bones_frame", c.bones_frame, { nonEmpty() });
+    c.fixture_enabled = p.flag("fixture/enabled", c.fixture_enabled);
+    c.fixture_stiffness = p.number("fixture/stiffness", c.fixture_stiffness, "N/m", { nonNegative() });
+    c.fixture_max_force = p.number("fixture/max_force", c.fixture_max_force, "N", { nonNegative() });
+    // Order of /collision/distances and /collision/report.
+    const std::vector<std::string> names = p.texts("tools", {}, { nonEmpty() });
+    if (names.empty())
+      p.fail("tools", "(empty or not set)", "", "a non-empty list of tool names");
+    c.tools.clear();
+    for (const std::string& name : names)
+      c.tools.push_back(loadTool(p, name));
+  }
+  catch (const saras_common::ParamError& e)
+  {
+    error = e.what();
+    return false;
   }
   return true;
 }
