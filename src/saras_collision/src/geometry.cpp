@@ -209,36 +209,34 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
 // crossing of two of its 6 linear pieces (kinks of |.| included).
 namespace
 {
-/// capsuleBox() without the input checks (inputs finite, r >= 0).
-DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
-                                 const OrientedBox& box)
+/// The result for the closest axis point @p axis_point (world) outside the box: @p v = that point
+/// minus the closest box point, in box coordinates, |v| = @p axis > 0.
+DistanceResult outsideResult(const Eigen::Vector3d& axis_point, const Eigen::Vector3d& v, double axis, double r,
+                             const OrientedBox& box)
 {
-  const Eigen::Matrix3d& R = box.axes;
-  const Eigen::Vector3d& h = box.half;
-  const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
-  if (p1 == p2)
-  {
-    // Sphere: closest box point = clamped centre (the general path below gives the same).
-    const Eigen::Vector3d q(clampTo(a[0], h[0]), clampTo(a[1], h[1]), clampTo(a[2], h[2]));
-    const Eigen::Vector3d v = a - q;
-    const double axis2 = v.squaredNorm();
-    // Centre outside the box (inside: the general path, whose depth walk reduces to the
-    // nearest face for d = 0).
-    if (axis2 > 0.0)
-    {
-      const double axis = std::sqrt(axis2);
-      DistanceResult out;
-      out.distance = axis - r;
-      out.code = classify(out.distance);
-      const Eigen::Vector3d v_world = R * v;
-      out.normal = v_world * (1.0 / axis);
-      out.point2 = p1 - v_world;
-      out.point1 = p1 - (surfaceFactor(out.distance) * r) * out.normal;
-      return out;
-    }
-  }
-  const Eigen::Vector3d d = R.transpose() * (p2 - p1);  // exactly zero for a sphere
+  DistanceResult out;
+  out.distance = axis - r;
+  out.code = classify(out.distance);
+  const Eigen::Vector3d v_world = box.axes * v;  // axis point - box point, world
+  out.normal = v_world / axis;
+  out.point2 = axis_point - v_world;
+  out.point1 = axis_point - (surfaceFactor(out.distance) * r) * out.normal;
+  return out;
+}
 
+/// x clamped to the box [-h, h] (box coordinates).
+Eigen::Vector3d clampToBox(const Eigen::Vector3d& x, const Eigen::Vector3d& h)
+{
+  return Eigen::Vector3d(clampTo(x[0], h[0]), clampTo(x[1], h[1]), clampTo(x[2], h[2]));
+}
+
+/**
+ * The minimiser t in [0, 1] of F(t) (see above) for the axis x(t) = a + t d in box coordinates:
+ * the zero of F'(t), found by walking its (at most 6) sorted breakpoints and interpolating
+ * linearly inside the piece where F' changes sign.
+ */
+double closestAxisParameter(const Eigen::Vector3d& a, const Eigen::Vector3d& d, const Eigen::Vector3d& h)
+{
   auto slope = [&](double t) {
     double g = 0.0;
     for (int i = 0; i < 3; ++i)
@@ -248,109 +246,109 @@ DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3
     }
     return g;
   };
-
-  double t = 0.0;
   const double g0 = d.isZero(0.0) ? 0.0 : slope(0.0);  // sphere: t = 0
-  if (g0 < 0.0)
+  if (!(g0 < 0.0))
+    return 0.0;
+  const double g1 = slope(1.0);
+  if (g1 <= 0.0)
+    return 1.0;
+  double bp[7];
+  int n = 0;
+  for (int i = 0; i < 3; ++i)
   {
-    const double g1 = slope(1.0);
-    if (g1 <= 0.0)
-    {
-      t = 1.0;
-    }
-    else
-    {
-      double bp[7];
-      int n = 0;
-      for (int i = 0; i < 3; ++i)
-      {
-        if (d[i] == 0.0)
-          continue;
-        const double ta = (-h[i] - a[i]) / d[i];
-        const double tb = (h[i] - a[i]) / d[i];
-        if (ta > 0.0 && ta < 1.0)
-          bp[n++] = ta;
-        if (tb > 0.0 && tb < 1.0)
-          bp[n++] = tb;
-      }
-      for (int i = 1; i < n; ++i)  // insertion sort of <= 6 values
-      {
-        const double key = bp[i];
-        int j = i - 1;
-        for (; j >= 0 && bp[j] > key; --j)
-          bp[j + 1] = bp[j];
-        bp[j + 1] = key;
-      }
-      bp[n++] = 1.0;
-      double t_prev = 0.0, g_prev = g0;
-      t = 1.0;
-      for (int k = 0; k < n; ++k)
-      {
-        const double g = k + 1 == n ? g1 : slope(bp[k]);
-        if (g >= 0.0)
-        {
-          t = t_prev + (-g_prev) * (bp[k] - t_prev) / (g - g_prev);
-          t = std::min(std::max(t, t_prev), bp[k]);
-          break;
-        }
-        t_prev = bp[k];
-        g_prev = g;
-      }
-    }
+    if (d[i] == 0.0)
+      continue;
+    const double ta = (-h[i] - a[i]) / d[i];
+    const double tb = (h[i] - a[i]) / d[i];
+    if (ta > 0.0 && ta < 1.0)
+      bp[n++] = ta;
+    if (tb > 0.0 && tb < 1.0)
+      bp[n++] = tb;
   }
-
-  DistanceResult out;
-  Eigen::Vector3d x = a + t * d;
-  Eigen::Vector3d q(clampTo(x[0], h[0]), clampTo(x[1], h[1]), clampTo(x[2], h[2]));
-  const Eigen::Vector3d v = x - q;
-  const double axis = v.norm();
-  // Entering the box leaves x(t*) on its boundary up to rounding: below the tangent tolerance
-  // the depth computation below decides (it returns >= 0 only if the axis merely touches).
-  if (axis > kTangentTolerance || (axis > 0.0 && minimumDepth(a, d, h, t) >= 0.0))
+  for (int i = 1; i < n; ++i)  // insertion sort of <= 6 values
   {
-    out.distance = axis - r;
-    out.code = classify(out.distance);
-    const Eigen::Vector3d v_world = R * v;  // axis point - box point, world
-    out.normal = v_world * (1.0 / axis);
-    const Eigen::Vector3d axis_point = p1 + t * (p2 - p1);
-    out.point2 = axis_point - v_world;
-    out.point1 = axis_point - (surfaceFactor(out.distance) * r) * out.normal;
-    return out;
+    const double key = bp[i];
+    int j = i - 1;
+    for (; j >= 0 && bp[j] > key; --j)
+      bp[j + 1] = bp[j];
+    bp[j + 1] = key;
   }
+  bp[n++] = 1.0;
+  double t_prev = 0.0, g_prev = g0;
+  for (int k = 0; k < n; ++k)
+  {
+    const double g = k + 1 == n ? g1 : slope(bp[k]);
+    if (g >= 0.0)
+    {
+      const double t = t_prev + (-g_prev) * (bp[k] - t_prev) / (g - g_prev);
+      return std::min(std::max(t, t_prev), bp[k]);
+    }
+    t_prev = bp[k];
+    g_prev = g;
+  }
+  return 1.0;
+}
 
-  // The axis reaches the box.
-  double best_t = t;
-  const double best = minimumDepth(a, d, h, t, &best_t);
-  x = a + best_t * d;
+/**
+ * The axis reaches the box: the deepest axis point (minimum of G from minimumDepth(), @p t_hint
+ * an extra candidate) and, when intersecting, its projection on the nearest face.
+ */
+DistanceResult reachingResult(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
+                              const OrientedBox& box, const Eigen::Vector3d& a, const Eigen::Vector3d& d,
+                              double t_hint)
+{
+  const Eigen::Vector3d& h = box.half;
+  double best_t = t_hint;
+  const double best = minimumDepth(a, d, h, t_hint, &best_t);
+  const Eigen::Vector3d x = a + best_t * d;
   const Eigen::Vector3d axis_point = p1 + best_t * (p2 - p1);
+  DistanceResult out;
   out.distance = std::min(best, 0.0) - r;
   out.code = classify(out.distance);
   int face = 0;
-  double face_g = std::abs(x[0]) - h[0];
-  for (int i = 1; i < 3; ++i)
-  {
-    const double g = std::abs(x[i]) - h[i];
-    if (g > face_g)
-    {
-      face_g = g;
-      face = i;
-    }
-  }
+  (x.cwiseAbs() - h).maxCoeff(&face);  // nearest face: largest |x_i| - h_i
   const double sign = x[face] < 0.0 ? -1.0 : 1.0;
-  out.normal = R.col(face) * sign;
+  out.normal = box.axes.col(face) * sign;
+  out.point1 = axis_point;
   if (out.code == kIntersecting)
   {
     Eigen::Vector3d on_face = x;
     on_face[face] = sign * h[face];
-    out.point1 = axis_point;
-    out.point2 = box.center + R * on_face;
+    out.point2 = box.center + box.axes * on_face;
   }
   else
   {
-    out.point1 = axis_point;  // tangent: zero radius axis touching the box
-    out.point2 = axis_point;
+    out.point2 = axis_point;  // tangent: zero radius axis touching the box
   }
   return out;
+}
+
+/// capsuleBox() without the input checks (inputs finite, r >= 0).
+DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
+                                 const OrientedBox& box)
+{
+  const Eigen::Matrix3d& R = box.axes;
+  const Eigen::Vector3d& h = box.half;
+  const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
+  if (p1 == p2)
+  {
+    // Sphere with its centre outside the box: closest box point = clamped centre (inside: the
+    // general path, whose depth walk reduces to the nearest face for d = 0).
+    const Eigen::Vector3d v = a - clampToBox(a, h);
+    const double axis2 = v.squaredNorm();
+    if (axis2 > 0.0)
+      return outsideResult(p1, v, std::sqrt(axis2), r, box);
+  }
+  const Eigen::Vector3d d = R.transpose() * (p2 - p1);  // exactly zero for a sphere
+  const double t = closestAxisParameter(a, d, h);
+  const Eigen::Vector3d x = a + t * d;
+  const Eigen::Vector3d v = x - clampToBox(x, h);
+  const double axis = v.norm();
+  // Entering the box leaves x(t*) on its boundary up to rounding: below the tangent tolerance
+  // the depth computation decides (it returns >= 0 only if the axis merely touches).
+  if (axis > kTangentTolerance || (axis > 0.0 && minimumDepth(a, d, h, t) >= 0.0))
+    return outsideResult(p1 + t * (p2 - p1), v, axis, r, box);
+  return reachingResult(p1, p2, r, box, a, d, t);
 }
 
 }  // namespace
