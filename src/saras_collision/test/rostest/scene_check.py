@@ -137,7 +137,16 @@ class SceneCheck(unittest.TestCase):
             rate.sleep()
 
     def test_scene(self):
+        """One scenario in phases (each phase starts from the state the previous one left)."""
         self.spin_publishing(3.0)
+        d = self.check_distances_fixture_markers()
+        self.check_health(d)
+        self.check_nan_rejected()
+        self.check_moved_bones()
+        self.check_inputs_stop()
+
+    def check_distances_fixture_markers(self):
+        """Distances, report, fixture wrench and markers against the references. @return the distances"""
         # Snapshot: the references below take time and the inputs go stale meanwhile.
         distances, report, wrench, markers = self.distances, self.report, self.wrench, self.markers
         self.assertIsNotNone(distances, "no /collision/distances")
@@ -181,7 +190,10 @@ class SceneCheck(unittest.TestCase):
         bone = [m for m in markers.markers if m.ns == "bones"][0]
         self.assertAlmostEqual(bone.pose.position.x, -0.035, delta=1e-9)
         self.assertAlmostEqual(bone.pose.position.z, 0.118, delta=1e-9)
-        # Health: PSM2 missing -> ERROR naming it once the start-up grace (tf_timeout 3 s) is over.
+        return d
+
+    def check_health(self, d):
+        """Health: PSM2 missing -> ERROR naming it once the start-up grace (tf_timeout 3 s) is over."""
         status = self.wait_inputs_status(
             lambda s: s.level == DiagnosticStatus.ERROR and "lost for: PSM2" in s.message, 6.0, publishing=True)
         self.assertIsNotNone(status, "no ERROR inputs status naming only the missing PSM2 on /diagnostics")
@@ -194,7 +206,8 @@ class SceneCheck(unittest.TestCase):
         self.assertTrue(self.rate_status, "no cycle rate status on /diagnostics")
         self.assertEqual(self.rate_status[-1].hardware_id, "collision")
 
-        # NaN poses for PSM2 are rejected and counted; the node keeps running.
+    def check_nan_rejected(self):
+        """NaN poses for PSM2 are rejected and counted; the node keeps running."""
         self.spin_publishing(1.5, nan_psm2=True)
         self.assertTrue(math.isnan(self.distances.data[3]))
         self.assertAlmostEqual(self.distances.data[0], 0.0075, delta=1e-9)
@@ -202,6 +215,8 @@ class SceneCheck(unittest.TestCase):
         self.assertIsNotNone(status, "no inputs status on /diagnostics")
         self.assertGreater(int({kv.key: kv.value for kv in status.values}["poses rejected (non-finite)"]), 0)
 
+    def check_moved_bones(self):
+        """The bone marker moves: the node follows it without restart."""
         # The bone marker moves 10 mm towards the feet (new static TF): the node follows it without
         # restart; mesa_left is now 17.5 mm from the bone and the fixture force is 200 * 2.5 mm.
         t = TransformStamped()
@@ -217,6 +232,8 @@ class SceneCheck(unittest.TestCase):
         self.assertEqual(self.report.tools[0].nearest_object, "bone_0")
         self.assertAlmostEqual(self.wrench.wrench.force.y, 0.5, delta=1e-9)
 
+    def check_inputs_stop(self):
+        """Inputs stop: every tool stale, the fixture releases, the health says STALE."""
         # Inputs stop: after ~pose_timeout every tool is stale (NaN) and the fixture releases.
         rospy.sleep(1.0)
         self.assertTrue(all(math.isnan(x) for x in self.distances.data), self.distances.data)
