@@ -92,7 +92,7 @@ int runCore(int iterations)
   const int sizes[2][2] = {{1280, 720}, {1920, 1080}};
   for (const auto& sz : sizes)
   {
-    CameraModel eye[2];
+    RawProjector eye[2];
     eye[0].configure(intrinsics(sz[0], sz[1]), nullptr);
     eye[1].configure(intrinsics(sz[0], sz[1]), nullptr);
     cv::Mat input(sz[1], sz[0], CV_8UC3);

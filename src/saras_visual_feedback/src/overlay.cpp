@@ -77,8 +77,8 @@ bool validateStyle(const OverlayStyle& s, std::string* error)
     return fail("circle_radius must be in [1, 100] px");
   if (s.marker_size < 4 || s.marker_size > 200)
     return fail("marker_size must be in [4, 200] px");
-  if (s.shaft_segments < 1 || s.shaft_segments > 64)
-    return fail("shaft_segments must be in [1, 64]");
+  if (s.shaft_segments < 1 || s.shaft_segments > kMaxShaftSegments)
+    return fail("shaft_segments must be in [1, " + std::to_string(kMaxShaftSegments) + "]");
   return true;
 }
 
@@ -266,7 +266,7 @@ cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k,
   return {std::min(std::max(o.x + t * d.x, xmin), xmax), std::min(std::max(o.y + t * d.y, ymin), ymax)};
 }
 
-bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
+bool drawOverlay(cv::Mat& image, ChannelOrder order, const RawProjector& camera, const OverlayStyle& style,
                  const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line,
                  HudCache* hud)
 {
@@ -283,15 +283,20 @@ bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, 
     if (tool.visible)
     {
       const cv::Scalar colour = toScalar(colourOf(r.proximity, style), order);
-      const Projection tip = camera.project(tool.tip);
+      // The straight shaft is curved by the lens: projected as a polyline, all points at once.
+      const int segments = tool.has_shaft ? style.shaft_segments : 0;
+      cv::Point3d points[kMaxShaftSegments + 1];
+      Projection proj[kMaxShaftSegments + 1];
+      for (int s = 0; s <= segments; ++s)
+        points[s] = tool.tip + (static_cast<double>(s) / std::max(1, segments)) * (tool.shaft - tool.tip);
+      camera.project(points, static_cast<std::size_t>(segments) + 1, proj);
+      const Projection& tip = proj[0];
       if (tool.has_shaft)
       {
-        // The straight shaft is curved by the lens: draw it as a projected polyline.
         Projection prev = tip;
-        for (int s = 1; s <= style.shaft_segments; ++s)
+        for (int s = 1; s <= segments; ++s)
         {
-          const double a = static_cast<double>(s) / style.shaft_segments;
-          const Projection cur = camera.project(tool.tip + a * (tool.shaft - tool.tip));
+          const Projection& cur = proj[s];
           if (prev.projectable && cur.projectable)
             cv::line(image, toFixedPoint(clampForDrawing(prev.pixel, k), kShift),
                      toFixedPoint(clampForDrawing(cur.pixel, k), kShift), colour, style.line_thickness,
