@@ -35,9 +35,9 @@
 #include <std_msgs/Float64MultiArray.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
-#include <saras_msgs/ComponentStatus.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 
-#include "saras_visual_feedback/image_pool.h"
+#include <saras_common/message_pool.h>
 #include "saras_visual_feedback/overlay.h"
 #include "saras_visual_feedback/pose_history.h"
 
@@ -194,14 +194,18 @@ public:
     pose_pub_[0] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_left/ee_pose", 1);
     pose_pub_[1] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_right/ee_pose", 1);
     dist_pub_ = nh.advertise<std_msgs::Float64MultiArray>("/collision/distances", 1);
-    status_sub_ = nh.subscribe<saras_msgs::ComponentStatus>(
-        "/saras/status", 10, [this](const saras_msgs::ComponentStatusConstPtr& m) {
-            std::lock_guard<std::mutex> lock(mutex_);
-          if (m->component == "/bench_vf")
-          {
-            status_ = m->message;
-            status_stamp_ = ros::WallTime::now();
-          }
+    status_sub_ = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 10, [this](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          for (const diagnostic_msgs::DiagnosticStatus& st : m->status)
+            if (st.name.rfind("bench_vf:", 0) == 0)
+            {
+              status_.clear();
+              for (const diagnostic_msgs::KeyValue& kv : st.values)
+                if (kv.key.find("frames in") != std::string::npos || kv.key.find("[ms]") != std::string::npos)
+                  status_ += kv.key + ": " + kv.value + "; ";
+              status_stamp_ = ros::WallTime::now();
+            }
         });
     // Tools' frames 10 cm in front of the cameras.
     std::vector<geometry_msgs::TransformStamped> tfs;
@@ -258,7 +262,7 @@ public:
     for (int e = 0; e < 2; ++e)
     {
       // Pooled input buffers: the publisher's cost is not what is measured here.
-      sensor_msgs::ImagePtr img = input_pool_[e].acquire(static_cast<std::size_t>(3 * w_) * h_);
+      sensor_msgs::ImagePtr img = input_pool_[e].nextWithData(static_cast<std::size_t>(3 * w_) * h_);
       img->header.stamp = stamp;
       img->header.frame_id = info_[e].header.frame_id;
       img->width = w_;
@@ -300,9 +304,9 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     char name[32];
     std::snprintf(name, sizeof(name), "%dx%d", w_, h_);
-    // Frames the nodelet took from its input queues, per eye, from its heartbeat ("left: N in").
+    // Frames the nodelet took from its input queues, per eye, from /diagnostics ("left frames in: N").
     long long taken[2] = {-1, -1};
-    const char* eyes[2] = {"left: ", "right: "};
+    const char* eyes[2] = {"left frames in: ", "right frames in: "};
     for (int e = 0; e < 2; ++e)
     {
       const std::size_t at = status_.find(eyes[e]);
@@ -323,7 +327,7 @@ public:
                   "process below)\n",
                   name, rate, seconds, static_cast<unsigned long long>(in_[0]),
                   static_cast<unsigned long long>(in_[1]));
-    std::printf("nodelet per-frame cost (its heartbeat): %s\n", status_.c_str());
+    std::printf("nodelet per-frame cost (/diagnostics): %s\n", status_.c_str());
     // Where frames were lost: before the nodelet's callback (subscription/synchroniser queues
     // overflowing while it is stalled) or after it (the viewer's queue).
     for (int e = 0; e < 2; ++e)
@@ -346,7 +350,8 @@ private:
   int w_, h_;
   ros::Publisher image_pub_[2], info_pub_[2], pose_pub_[2], dist_pub_;
   ros::Subscriber out_sub_[2], status_sub_;
-  ImagePool input_pool_[2];
+  saras_common::MessagePool<sensor_msgs::Image> input_pool_[2]{saras_common::MessagePool<sensor_msgs::Image>(6),
+                                                              saras_common::MessagePool<sensor_msgs::Image>(6)};
   bool count_outputs_;
   std::string status_;
   ros::WallTime status_stamp_;

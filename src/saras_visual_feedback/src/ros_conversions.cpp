@@ -106,7 +106,7 @@ const std::string& EyeCamera::update(const sensor_msgs::CameraInfo& info, std::u
   return error_;
 }
 
-bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, ImagePool* pool, sensor_msgs::ImagePtr* out,
+bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, saras_common::MessagePool<sensor_msgs::Image>* pool, sensor_msgs::ImagePtr* out,
                    cv::Mat* canvas, ChannelOrder* order, std::string* error)
 {
   if (!imageBufferConsistent(*image, error))
@@ -119,7 +119,7 @@ bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, ImagePool* pool, sen
     {
       // The input is shared and const when zero-copied from the camera nodelet: copied once.
       *order = (e == enc::RGB8 || e == enc::RGBA8) ? ChannelOrder::kRgb : ChannelOrder::kBgr;
-      sensor_msgs::ImagePtr m = pool->acquire(image->data.size());
+      sensor_msgs::ImagePtr m = pool->nextWithData(image->data.size());
       m->header = image->header;
       m->height = image->height;
       m->width = image->width;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include <geometry_msgs/PoseStamped.h>
+#include <saras_common/message_pool.h>
 #include <image_geometry/pinhole_camera_model.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -16,7 +17,6 @@
 #include <tf2_ros/buffer.h>
 
 #include "saras_visual_feedback/frame_composer.h"
-#include "saras_visual_feedback/image_pool.h"
 #include "saras_visual_feedback/pose_history.h"
 #include "saras_visual_feedback/raw_projector.h"
 
@@ -65,7 +65,7 @@ bool imageBufferConsistent(const sensor_msgs::Image& image, std::string* error);
  *        colour encodings (one memcpy, no allocation in steady state), converted to bgr8 for
  *        others. @return false with a reason in @p error for an inconsistent or unconvertible image.
  */
-bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, ImagePool* pool, sensor_msgs::ImagePtr* out,
+bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, saras_common::MessagePool<sensor_msgs::Image>* pool, sensor_msgs::ImagePtr* out,
                    cv::Mat* canvas, ChannelOrder* order, std::string* error);
 
 /// The pose sample of @p msg (stamped with @p now when unstamped); false (reason in @p error)

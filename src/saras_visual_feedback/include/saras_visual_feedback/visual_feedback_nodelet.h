@@ -26,7 +26,6 @@
 
 #include "saras_visual_feedback/VisualFeedbackConfig.h"
 #include "saras_visual_feedback/frame_composer.h"
-#include "saras_visual_feedback/image_pool.h"
 #include "saras_visual_feedback/ros_conversions.h"
 #include "saras_visual_feedback/tool_scene.h"
 #include "saras_visual_feedback/visual_feedback_params.h"
@@ -51,7 +50,8 @@ private:
     /// active (not installed, or disabled by <name>/image/disable_pub_plugins).
     ros::Publisher jpeg_pub;
     cv::Mat jpeg_bgr;          ///< colour-conversion buffer for the JPEG encoder
-    ImagePool pool;            ///< output buffers, reused once released
+    /// Output buffers, reused once every subscriber released them (publisher queue + viewers).
+    saras_common::MessagePool<sensor_msgs::Image> pool{6};
     HudCache hud;              ///< rendered HUD text, redrawn on change only
     std::mutex mutex;          ///< serialises this eye's callback
     EyeCamera camera;          ///< touched only by this eye's callback
