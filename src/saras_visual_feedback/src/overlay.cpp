@@ -266,6 +266,47 @@ cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k,
   return {std::min(std::max(o.x + t * d.x, xmin), xmax), std::min(std::max(o.y + t * d.y, ymin), ymax)};
 }
 
+namespace
+{
+/// HUD: one line per tool (distance in mm, in its region's colour) and the status line.
+void drawHud(cv::Mat& image, ChannelOrder order, const OverlayStyle& style, const ToolOverlay* tools, std::size_t n,
+             const char* status_line, HudCache* hud)
+{
+  char text[kMaxTools + 1][96];
+  const char* lines[kMaxTools + 1];
+  Rgb colours[kMaxTools + 1];
+  std::size_t m = 0;
+  if (style.draw_hud)
+  {
+    for (std::size_t i = 0; i < n; ++i, ++m)
+    {
+      const ToolOverlay& tool = tools[i];
+      if (!tool.visible)
+        std::snprintf(text[m], sizeof(text[m]), "%s: no pose", tool.label);
+      else if (std::isnan(tool.distance))
+        std::snprintf(text[m], sizeof(text[m]), "%s: -- mm", tool.label);
+      else
+        std::snprintf(text[m], sizeof(text[m]), "%s: %.1f mm", tool.label, tool.distance * 1e3);
+      lines[m] = text[m];
+      colours[m] = colourOf(classify(tool.distance, style), style);
+    }
+  }
+  if (status_line && status_line[0] != '\0')
+  {
+    lines[m] = status_line;
+    colours[m] = style.unknown_colour;
+    ++m;
+  }
+  if (m > 0)
+  {
+    if (hud)
+      hud->draw(image, order, lines, colours, m);
+    else
+      HudCache().draw(image, order, lines, colours, m);
+  }
+}
+}  // namespace
+
 bool drawOverlay(cv::Mat& image, ChannelOrder order, const RawProjector& camera, const OverlayStyle& style,
                  const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line,
                  HudCache* hud)
@@ -337,39 +378,7 @@ bool drawOverlay(cv::Mat& image, ChannelOrder order, const RawProjector& camera,
       results[i] = r;
   }
 
-  // HUD: one line per tool (distance in mm, in its region's colour) and the status line.
-  char text[kMaxTools + 1][96];
-  const char* lines[kMaxTools + 1];
-  Rgb colours[kMaxTools + 1];
-  std::size_t m = 0;
-  if (style.draw_hud)
-  {
-    for (std::size_t i = 0; i < n; ++i, ++m)
-    {
-      const ToolOverlay& tool = tools[i];
-      if (!tool.visible)
-        std::snprintf(text[m], sizeof(text[m]), "%s: no pose", tool.label);
-      else if (std::isnan(tool.distance))
-        std::snprintf(text[m], sizeof(text[m]), "%s: -- mm", tool.label);
-      else
-        std::snprintf(text[m], sizeof(text[m]), "%s: %.1f mm", tool.label, tool.distance * 1e3);
-      lines[m] = text[m];
-      colours[m] = colourOf(classify(tool.distance, style), style);
-    }
-  }
-  if (status_line && status_line[0] != '\0')
-  {
-    lines[m] = status_line;
-    colours[m] = style.unknown_colour;
-    ++m;
-  }
-  if (m > 0)
-  {
-    if (hud)
-      hud->draw(image, order, lines, colours, m);
-    else
-      HudCache().draw(image, order, lines, colours, m);
-  }
+  drawHud(image, order, style, tools, n, status_line, hud);
   return true;
 }
 
