@@ -150,3 +150,13 @@ def test_geometry_msgs_round_trip():
     np.testing.assert_allclose(tf.transform_msg_to_matrix(ts.transform), T, atol=1e-12)
     ts2 = tf.transform_stamped('a', 'b', xyz=[1, 2, 3], q=[0, 0, 0, 1])
     assert ts2.transform.translation.z == 3.0 and ts2.transform.rotation.w == 1.0
+
+
+def test_rpy_and_quaternions_match_scipy():
+    Rotation = pytest.importorskip('scipy.spatial.transform').Rotation
+    for _ in range(200):
+        rpy = RNG.uniform(-math.pi, math.pi, 3)
+        ref = Rotation.from_euler('xyz', rpy)   # extrinsic x, y, z = URDF rpy
+        q = tf.quaternion_from_matrix(tf.rpy_to_matrix(rpy))
+        assert min(np.abs(q - ref.as_quat()).max(), np.abs(q + ref.as_quat()).max()) < 1e-12
+        assert abs(tf.rotation_angle(ref.as_matrix()) - ref.magnitude()) < 1e-9
