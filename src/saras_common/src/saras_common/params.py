@@ -242,9 +242,8 @@ def read_ros(spec, namespace='~'):
     """:func:`read` over the parameter server's ``namespace`` (default: the node's private one);
     one ``get_param`` call, so every parameter is read exactly once."""
     import rospy
-    values = rospy.get_param(namespace, {}) if rospy.has_param(namespace) else {}
     where = namespace if namespace.endswith('/') or namespace == '~' else namespace + '/'
-    return read(values, spec, where if where != '~' else rospy.resolve_name('~') + '/')
+    return read(rospy.get_param(namespace, {}), spec, where)
 
 
 def fatal(node, message, code=2):
