@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from saras_calibration.pattern import CircularPattern
-from saras_calibration.transforms import inverse, rotation_angle_deg, transform_from_rpy
+from saras_common.transforms import inverse, rotation_angle_deg, transform_from_rpy
 
 er = pytest.importorskip('saras_drivers.endoscope_renderer')
 ts = pytest.importorskip('saras_drivers.tissue_surface')

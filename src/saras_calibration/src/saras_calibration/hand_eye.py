@@ -30,7 +30,7 @@ import numpy as np
 from scipy.optimize import least_squares, minimize
 from scipy.spatial.transform import Rotation
 
-from .transforms import (average_rotation, inverse, make_transform, validate_transforms)
+from saras_common.transforms import (average_rotation, inverse, make_transform, validate_transforms)
 
 __all__ = ['HandEyeError', 'HandEyeResult', 'solve_hand_eye', 'opencv_hand_eye', 'OPENCV_METHODS',
            'hand_eye_residuals', 'check_rotation_excitation']
