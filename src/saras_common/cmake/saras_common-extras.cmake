@@ -10,9 +10,9 @@ function(saras_add_pytest dir)
     string(REPLACE "/" "_" _sp_NAME "${dir}")
   endif()
   set(_xml "pytest-${_sp_NAME}.xml")
+  # catkin's run_tests.py runs each COMMAND argument as one shell command line
+  string(REPLACE ";" " " _args "${_sp_ARGS}")
   catkin_run_tests_target("pytest" ${_sp_NAME} ${_xml}
-    COMMAND /usr/bin/python3 -m pytest -q -p no:cacheprovider ${_sp_ARGS}
-      --junitxml=${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/${_xml}
-      ${PROJECT_SOURCE_DIR}/${dir}
+    COMMAND "/usr/bin/python3 -m pytest -q -p no:cacheprovider ${_args} --junitxml=${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/${_xml} ${PROJECT_SOURCE_DIR}/${dir}"
     WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 endfunction()
