@@ -13,18 +13,14 @@ import time
 from pathlib import Path
 
 import pytest
+from netns_helpers import NETNS, WS, Deployment
 
-WS = Path(__file__).resolve().parents[3]
-NETNS = WS / 'scripts' / 'cluster' / 'netns.sh'
-ENV_LOADER = WS / 'scripts' / 'cluster' / 'env_loader.sh'
 SMOKE_LAUNCH = Path(__file__).resolve().parent / 'launch' / 'cluster_smoke.launch'
-PREFIX = 'sarastest'
-BASE = '10.77.9'
-RUN = '/tmp/%s_cluster' % PREFIX
-ROLES = ['core_pc', 'teleop_pc', 'dvrk_pc', 'console_pc', 'saras_left', 'saras_right']
-ADDR = {role: '%s.%d' % (BASE, 10 + i) for i, role in enumerate(ROLES)}
-ENV = dict(os.environ, SARAS_NETNS_PREFIX=PREFIX, SARAS_NETNS_SUBNET=BASE + '.0/24',
-           SARAS_NETNS_RUN=RUN)
+ENV_LOADER = WS / 'scripts' / 'cluster' / 'env_loader.sh'
+CLUSTER = Deployment('sarastest', '10.77.9')
+PREFIX, BASE, RUN, ADDR, ENV = (CLUSTER.prefix, CLUSTER.base, CLUSTER.run_dir, CLUSTER.addr,
+                                CLUSTER.env)
+netns, in_ns = CLUSTER.netns, CLUSTER.in_ns
 
 PARAMIKO_CHECK = '''
 import sys, paramiko
@@ -36,16 +32,6 @@ ssh.connect(sys.argv[1], 22, None, timeout=10)
 _, out, _ = ssh.exec_command('echo $SSH_CONNECTION')
 print(out.read().decode().strip())
 '''
-
-
-def netns(*args, timeout=60, check=True):
-    return subprocess.run(['bash', str(NETNS)] + list(args), env=ENV, timeout=timeout, check=check,
-                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def in_ns(role, *cmd, timeout=30):
-    """Runs cmd in role's namespace with ROS_IP / ROS_MASTER_URI / HOME of the run."""
-    return netns('exec', role, *cmd, timeout=timeout, check=False)
 
 
 def our_processes():
@@ -66,27 +52,16 @@ def our_processes():
 
 @pytest.fixture(scope='module')
 def cluster():
-    if os.geteuid() != 0:
-        pytest.skip('root is required for network namespaces')
-    netns('down', check=False)
-    up = netns('up', check=False)
-    if up.returncode == 77:
-        pytest.skip(up.stdout)
-    assert up.returncode == 0, up.stdout
+    CLUSTER.up_or_skip()
     yield
-    netns('down', check=False)
+    CLUSTER.down()
 
 
 @pytest.fixture(scope='module')
 def roscore(cluster):
-    core = subprocess.Popen(['bash', str(NETNS), 'exec', 'core_pc', 'roscore', '-p', '11311'],
-                            env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-    deadline = time.monotonic() + 40
-    while time.monotonic() < deadline:
-        if in_ns('teleop_pc', 'rosnode', 'list').stdout.count('/rosout'):
-            break
-        time.sleep(1)
+    core = CLUSTER.popen('core_pc', 'roscore', '-p', '11311', stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL)
+    CLUSTER.wait_master('teleop_pc')
     yield core
     if core.poll() is None:  # test_down_leaves_nothing normally stopped it already
         os.killpg(core.pid, signal.SIGINT)
@@ -129,12 +104,10 @@ def test_roscore_in_core_used_from_teleop(roscore):
 
 
 def test_roslaunch_machine_tag_starts_node_on_teleop(roscore):
-    launch = subprocess.Popen(
-        ['bash', str(NETNS), 'exec', 'core_pc', 'roslaunch', str(SMOKE_LAUNCH),
-         'core_addr:=' + ADDR['core_pc'], 'remote_addr:=' + ADDR['teleop_pc'],
-         'env_loader:=' + str(ENV_LOADER)],
-        env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-        start_new_session=True)
+    launch = CLUSTER.popen('core_pc', 'roslaunch', str(SMOKE_LAUNCH),
+                           'core_addr:=' + ADDR['core_pc'], 'remote_addr:=' + ADDR['teleop_pc'],
+                           'env_loader:=' + str(ENV_LOADER),
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
         r = in_ns('core_pc', 'rostopic', 'echo', '-n', '1', '/cluster_smoke', timeout=60)
         assert 'data: "hi"' in r.stdout, r.stdout
