@@ -19,11 +19,11 @@
 # created in the host's own namespace.
 #
 # Environment (defaults in brackets):
-#   SARAS_NETNS_PREFIX  namespace name prefix                             [saras]
-#   SARAS_NETNS_SUBNET  private /24 of the deployment                     [10.77.0.0/24]
-#   SARAS_NETNS_ROLES   machine roles; the first is the ROS core           [core_pc teleop_pc dvrk_pc
-#                                                                            console_pc saras_left saras_right]
-#   SARAS_NETNS_RUN     run directory                                      [/tmp/<prefix>_cluster]
+#   SARAS_NETNS_PREFIX  namespace name prefix            [saras]
+#   SARAS_NETNS_SUBNET  private /24 of the deployment    [10.77.0.0/24]
+#   SARAS_NETNS_ROLES   machine roles, the first one is the ROS core
+#                       [core_pc teleop_pc dvrk_pc console_pc saras_left saras_right]
+#   SARAS_NETNS_RUN     run directory                    [/tmp/<prefix>_cluster]
 # Role i (0-based) gets host address 10+i: core_pc 10.77.0.10, teleop_pc .11, dvrk_pc .12, ...
 # Root is required; without it (or without network-namespace support) the script exits 77.
 set -Eeuo pipefail
@@ -31,7 +31,8 @@ export PATH=/usr/sbin:/usr/bin:/sbin:/bin:$PATH
 
 PREFIX="${SARAS_NETNS_PREFIX:-saras}"
 SUBNET="${SARAS_NETNS_SUBNET:-10.77.0.0/24}"
-read -r -a ROLES <<< "${SARAS_NETNS_ROLES:-core_pc teleop_pc dvrk_pc console_pc saras_left saras_right}"
+DEFAULT_ROLES="core_pc teleop_pc dvrk_pc console_pc saras_left saras_right"
+read -r -a ROLES <<< "${SARAS_NETNS_ROLES:-$DEFAULT_ROLES}"
 RUN="${SARAS_NETNS_RUN:-/tmp/${PREFIX}_cluster}"
 LAN="${PREFIX}_lan"
 MARKER=".saras_netns_run"
