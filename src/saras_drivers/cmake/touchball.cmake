@@ -1,21 +1,23 @@
 # Build rules of the C++ touchball component; included from CMakeLists.txt.
-#   saras_drivers_touchball_core     ROS-agnostic core: protocol v1 decode/encode, link validation,
-#                                    sequence/resync, twist, watchdog deadline, force latch, UDP socket,
+#   saras_drivers_touchball_core     ROS-agnostic core: protocol v2 decode/encode, HMAC-SHA256 tags
+#                                    (OpenSSL libcrypto), key file, link validation, session handshake,
+#                                    sequence, twist, watchdog deadline, force latch, UDP socket,
 #                                    receive-thread hand-off and health report, Touch IK
 #   saras_drivers_touchball_nodelet  nodelet saras_drivers/TouchballReceiver (nodelet_plugins.xml) and its
 #                                    parameter reading (saras_common::Params); as a node:
 #                                    `nodelet standalone saras_drivers/TouchballReceiver`
-find_package(ZLIB REQUIRED)
+find_package(OpenSSL REQUIRED)
 
 add_library(${PROJECT_NAME}_touchball_core
+  src/touchball/touchball_auth.cpp
   src/touchball/touchball_kinematics.cpp
   src/touchball/touchball_link.cpp
   src/touchball/touchball_protocol.cpp
   src/touchball/touchball_receiver_core.cpp
   src/touchball/touchball_udp.cpp)
 target_include_directories(${PROJECT_NAME}_touchball_core PUBLIC include)
-target_include_directories(${PROJECT_NAME}_touchball_core SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${ZLIB_INCLUDE_DIRS})
-target_link_libraries(${PROJECT_NAME}_touchball_core ${ZLIB_LIBRARIES})
+target_include_directories(${PROJECT_NAME}_touchball_core SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OPENSSL_INCLUDE_DIR})
+target_link_libraries(${PROJECT_NAME}_touchball_core ${OPENSSL_CRYPTO_LIBRARY})
 target_compile_options(${PROJECT_NAME}_touchball_core PRIVATE -Wall -Wextra)
 
 add_library(${PROJECT_NAME}_touchball_nodelet
@@ -39,17 +41,18 @@ if(CATKIN_ENABLE_TESTING)
   # forward kinematics (the reference model, it generates the URDF); regenerate with
   # test/touchball/touch_fk_table.py (test/touchball/test_touch_fk_table.py checks it is current).
   catkin_add_gtest(${PROJECT_NAME}_touchball_test
+    test/touchball/test_touchball_auth.cpp
     test/touchball/test_touchball_core.cpp
     test/touchball/test_touchball_kinematics.cpp
     test/touchball/test_touchball_receiver_core.cpp
     test/touchball/test_touchball_receiver_params.cpp
     test/touchball/test_touchball_udp.cpp
     src/touchball/touchball_receiver_params.cpp)
-  target_include_directories(${PROJECT_NAME}_touchball_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${ZLIB_INCLUDE_DIRS}
+  target_include_directories(${PROJECT_NAME}_touchball_test SYSTEM PRIVATE ${EIGEN3_INCLUDE_DIRS} ${OPENSSL_INCLUDE_DIR}
     ${catkin_INCLUDE_DIRS})
   target_compile_definitions(${PROJECT_NAME}_touchball_test PRIVATE
     TOUCHBALL_TEST_DATA="${PROJECT_SOURCE_DIR}/test/touchball/data")
   # the parameter test reads through saras_common::Params from a map (no roscore); it needs roscpp's XmlRpc
-  target_link_libraries(${PROJECT_NAME}_touchball_test ${PROJECT_NAME}_touchball_core ${ZLIB_LIBRARIES}
+  target_link_libraries(${PROJECT_NAME}_touchball_test ${PROJECT_NAME}_touchball_core ${OPENSSL_CRYPTO_LIBRARY}
     ${catkin_LIBRARIES})
 endif()

@@ -1,7 +1,8 @@
 /**
  * @file touchball_link.h
- * @brief Touchball receiver core (ROS-agnostic): source filter, packet validation, sequence and
- *        resync accounting, twist estimation, watchdog deadline, force command latch.
+ * @brief Touchball receiver core (ROS-agnostic): source filter, packet authentication and
+ *        validation, session handshake, sequence accounting, twist estimation, watchdog deadline,
+ *        force command latch.
  *
  * The nodelet saras_drivers/TouchballReceiver owns the socket, the thread and the publishers;
  * everything that decides whether a datagram is accepted, what is published and when the link
@@ -13,7 +14,9 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "saras_drivers/touchball_protocol.h"
 
@@ -68,24 +71,45 @@ struct LinkParams
   bool any_source = false;         ///< accept every source address
   std::uint32_t source_ip = 0;     ///< allowed IPv4 source, host byte order (127.0.0.1 = 0x7f000001)
   double timeout = 0.03;           ///< [s] watchdog: no valid packet for this long => stale
-  double resync_after = 1.0;       ///< [s] silence after which the sequence may restart (>= timeout)
+  double resync_after = 1.0;       ///< [s] no state packet in the session for this long: a hello opens a new one (>= timeout)
   double twist_cutoff_hz = 100.0;  ///< [Hz] twist low-pass cut-off (0 = none)
 };
 
+/// Source of session nonces (non-zero, unpredictable); randomNonce() on the platform.
+using NonceSource = std::uint64_t (*)();
+
+/// What the last accepted datagram was.
+enum class Accepted
+{
+  NONE,
+  STATE,  ///< a state packet of the current session: packet(), twist estimates, lastGap()
+  HELLO   ///< a hello: answer with a challenge carrying session() for consoleNonce()
+};
+
 /**
- * Validates console datagrams and tracks the health of the link (one per receiver).
- * After @ref accept returned Reject::NONE, packet(), twist estimates and lastGap() describe the
- * accepted packet. Rejections are counted per reason. Never throws on bad input.
+ * Authenticates and validates console datagrams, runs the session handshake and tracks the health
+ * of the link (one per receiver). Session: a hello (tag valid) while no session is streaming
+ * (no state packet in the current one for resync_after) opens a new session with a fresh nonce and
+ * restarts the sequence; the caller answers every accepted hello with a challenge. A hello while a
+ * session streams is refused (SESSION). State packets must carry the current session and a newer
+ * sequence number. Rejections are counted per reason. Never throws on bad input, never allocates
+ * in accept().
  */
 class TouchballLink
 {
 public:
-  /// @throws std::invalid_argument on a non-positive timeout or resync_after < timeout
-  explicit TouchballLink(const LinkParams& p);
+  /// @throws std::invalid_argument on a non-positive timeout, resync_after < timeout or a bad key
+  TouchballLink(const LinkParams& p, const std::vector<std::uint8_t>& key, NonceSource nonce = randomNonce);
 
-  /// Validate one datagram of @p n bytes from IPv4 @p source_ip (host order) received at @p now [s].
+  /// Authenticate and validate one datagram of @p n bytes from IPv4 @p source_ip (host order)
+  /// received at @p now [s]; on Reject::NONE, kind() says what it was.
   Reject accept(const std::uint8_t* data, std::size_t n, std::uint32_t source_ip, double now);
 
+  Accepted kind() const { return kind_; }
+  std::uint64_t session() const { return session_; }            ///< current session nonce (0: none)
+  std::uint64_t consoleNonce() const { return console_nonce_; }  ///< nonce of the hello it answers
+  std::uint64_t sessions() const { return sessions_; }           ///< sessions opened
+  const Hmac& mac() const { return *mac_; }
   const StatePacket& packet() const { return packet_; }
   const TwistEstimator& twist(int device) const { return twist_[device]; }
   std::uint32_t lastGap() const { return gap_; }
@@ -93,7 +117,7 @@ public:
   std::uint64_t gaps() const { return sequence_.gaps(); }
   std::uint64_t rejected(Reject r) const { return rejected_[static_cast<int>(r)]; }
   std::uint64_t rejectedTotal() const;
-  /// "crc 3, size 2" (reasons with a non-zero count), "" if none.
+  /// "mac 3, size 2" (reasons with a non-zero count), "" if none.
   std::string rejectedSummary() const;
   Reject lastError() const { return last_error_; }
   bool hasValid() const { return has_valid_; }
@@ -111,7 +135,12 @@ public:
   double waitTime(double now, bool stale, double idle_wake) const;
 
 private:
+  Reject onHello(const std::uint8_t* data, double now);
+  Reject onState(const std::uint8_t* data, double now);
+
   LinkParams p_;
+  std::unique_ptr<Hmac> mac_;
+  NonceSource nonce_;
   SequenceTracker sequence_;
   std::array<TwistEstimator, kDevices> twist_;
   StatePacket packet_, scratch_;
@@ -121,6 +150,9 @@ private:
   bool has_valid_ = false;
   double last_valid_ = 0.0;
   Reject last_error_ = Reject::NONE;
+  Accepted kind_ = Accepted::NONE;
+  std::uint64_t session_ = 0, console_nonce_ = 0, sessions_ = 0;
+  std::uint64_t session_states_ = 0;  ///< state packets accepted in the current session
 };
 
 /**

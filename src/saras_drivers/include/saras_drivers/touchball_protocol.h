@@ -1,7 +1,8 @@
 /**
  * @file touchball_protocol.h
- * @brief Touchball console link, UDP protocol version 1 (docs/touchball_protocol.md): decoding and
- *        validation of the 160-byte state packet, encoding of the 128-byte command packet.
+ * @brief Touchball console link, UDP protocol version 2 (docs/touchball_protocol.md): authenticated
+ *        packets (HMAC-SHA256 tag, session nonce, sequence). Decoding and validation of the 180-byte
+ *        state and 44-byte hello packets, encoding of the 148-byte command and 52-byte challenge.
  *
  * ROS-agnostic, allocation-free. All fields little-endian, floats IEEE-754 binary64; the byte
  * order is handled explicitly so the code is correct on any host. The Python module
@@ -15,18 +16,24 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "saras_drivers/touchball_auth.h"
+
 namespace saras_drivers
 {
 namespace touchball
 {
-constexpr std::uint8_t kVersion = 1;
-constexpr std::uint8_t kTypeState = 1;
-constexpr std::uint8_t kTypeCommand = 2;
-constexpr std::size_t kHeaderSize = 20;        ///< magic, version, type, flags, seq, sender_time
+constexpr std::uint8_t kVersion = 2;
+constexpr std::uint8_t kTypeState = 1;      ///< console -> ROS, device states
+constexpr std::uint8_t kTypeCommand = 2;    ///< ROS -> console, force commands
+constexpr std::uint8_t kTypeHello = 3;      ///< console -> ROS, asks for a session
+constexpr std::uint8_t kTypeChallenge = 4;  ///< ROS -> console, the session nonce
+constexpr std::size_t kHeaderSize = 28;        ///< magic, version, type, flags, seq, sender_time, session
 constexpr std::size_t kStateDeviceSize = 68;   ///< 3 f64 position, 4 f64 quaternion, f64 clip, u32 buttons
 constexpr std::size_t kCommandDeviceSize = 52; ///< 3 f64 force, 3 f64 torque, u32 flags
-constexpr std::size_t kStateSize = kHeaderSize + 2 * kStateDeviceSize + 4;     ///< 160 bytes
-constexpr std::size_t kCommandSize = kHeaderSize + 2 * kCommandDeviceSize + 4; ///< 128 bytes
+constexpr std::size_t kStateSize = kHeaderSize + 2 * kStateDeviceSize + kTagSize;      ///< 180 bytes
+constexpr std::size_t kCommandSize = kHeaderSize + 2 * kCommandDeviceSize + kTagSize;  ///< 148 bytes
+constexpr std::size_t kHelloSize = kHeaderSize + kTagSize;                             ///< 44 bytes
+constexpr std::size_t kChallengeSize = kHeaderSize + 8 + kTagSize;                     ///< 52 bytes
 constexpr std::uint32_t kButtonClutch = 0x1;
 constexpr std::uint32_t kButtonClip = 0x2;
 constexpr std::uint32_t kCommandEnabled = 0x1;
@@ -45,7 +52,8 @@ enum class Reject : int
   MAGIC,
   VERSION,
   TYPE,
-  CRC,
+  MAC,
+  SESSION,
   NON_FINITE,
   QUATERNION,
   DUPLICATE,
@@ -53,8 +61,10 @@ enum class Reject : int
   COUNT
 };
 constexpr int kRejectReasons = static_cast<int>(Reject::COUNT);
-/// Reason name as used in the status message and the Python module ("foreign_source", "crc", ...).
+/// Reason name as used in the status message and the Python module ("foreign_source", "mac", ...).
 const char* rejectName(Reject r);
+/// One-line explanation of a reason for the log ("protocol version 1 (unauthenticated) refused: ...").
+const char* rejectHelp(Reject r);
 
 /// One device of a state packet.
 struct DeviceState
@@ -71,7 +81,8 @@ struct DeviceState
 struct StatePacket
 {
   std::uint32_t seq = 0;
-  double sender_time = 0.0;  ///< console wall clock [s]
+  double sender_time = 0.0;   ///< console wall clock [s]
+  std::uint64_t session = 0;  ///< session nonce the packet is bound to
   std::array<DeviceState, kDevices> devices;
 };
 
@@ -83,20 +94,43 @@ struct DeviceCommand
   bool enabled = false;                  ///< false: the console applies zero force
 };
 
-/// CRC-32 (IEEE 802.3, as zlib.crc32) of n bytes.
-std::uint32_t crc32(const std::uint8_t* data, std::size_t n);
+/// Header fields of a hello packet (console -> ROS).
+struct Hello
+{
+  std::uint32_t seq = 0;
+  double sender_time = 0.0;
+  std::uint64_t console_nonce = 0;  ///< the console's random nonce (echoed by the challenge)
+};
 
 /**
- * Decode and validate a state packet. Checks in the documented order: size, magic, version,
- * type, crc, non_finite (sender time, then every float of the left, then the right device),
- * quaternion (left, then right). Returns Reject::NONE and fills @p out on success (quaternions
- * re-normalised); on failure @p out is unspecified. Never reads beyond @p n bytes.
+ * Check the frame of a datagram and return its type: size (>= 6 bytes), magic, version (a v1
+ * packet => VERSION), type (STATE or HELLO), exact size of that type, tag. On Reject::NONE
+ * @p type is kTypeState or kTypeHello. Never reads beyond @p n bytes.
  */
-Reject decodeState(const std::uint8_t* data, std::size_t n, StatePacket& out);
+Reject checkFrame(const std::uint8_t* data, std::size_t n, const Hmac& mac, std::uint8_t& type);
 
-/// Encode a command packet into @p out (kCommandSize bytes). Disabled devices are sent as given.
-void encodeCommand(std::uint32_t seq, double sender_time, const std::array<DeviceCommand, kDevices>& commands,
-                   std::uint8_t* out);
+/**
+ * Decode and validate a state packet whose frame checkFrame() accepted. Checks in the documented
+ * order: session (must equal @p session, non-zero), non_finite (sender time, then every float of
+ * the left, then the right device), quaternion (left, then right). Returns Reject::NONE and fills
+ * @p out on success (quaternions re-normalised); on failure @p out is unspecified.
+ */
+Reject decodeState(const std::uint8_t* data, std::uint64_t session, StatePacket& out);
+
+/// Decode a hello packet whose frame checkFrame() accepted (SESSION if its nonce is 0 or the time not finite).
+Reject decodeHello(const std::uint8_t* data, Hello& out);
+
+/// checkFrame + decodeState for a datagram that must be a state packet (TYPE if it is a hello).
+Reject decodeState(const std::uint8_t* data, std::size_t n, const Hmac& mac, std::uint64_t session,
+                   StatePacket& out);
+
+/// Encode a command packet into @p out (kCommandSize bytes), bound to @p session and tagged.
+void encodeCommand(std::uint32_t seq, double sender_time, std::uint64_t session,
+                   const std::array<DeviceCommand, kDevices>& commands, const Hmac& mac, std::uint8_t* out);
+
+/// Encode a challenge (kChallengeSize bytes): the new @p session for the hello of @p console_nonce.
+void encodeChallenge(std::uint32_t seq, double sender_time, std::uint64_t session, std::uint64_t console_nonce,
+                     const Hmac& mac, std::uint8_t* out);
 
 }  // namespace touchball
 }  // namespace saras_drivers

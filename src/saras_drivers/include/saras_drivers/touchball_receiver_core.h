@@ -29,6 +29,9 @@ namespace touchball
 /// What the publishers need of one accepted packet, copied out of the link under the lock.
 struct AcceptedPacket
 {
+  Accepted kind = Accepted::NONE;  ///< STATE: packet, twist, commands; HELLO: answer with a challenge
+  std::uint64_t session = 0;       ///< session the answer (command or challenge) is bound to
+  std::uint64_t console_nonce = 0; ///< HELLO: the console's nonce the challenge echoes
   StatePacket packet;
   double linear[kDevices][3] = {};   ///< [m/s] twist estimate per device (base frame)
   double angular[kDevices][3] = {};  ///< [rad/s]
@@ -63,6 +66,7 @@ struct LinkHealth
   std::array<std::uint64_t, kRejectReasons> rejected{};  ///< rejected datagrams per Reject reason
   std::uint64_t wrench_rejected = 0;  ///< force commands refused (wrong frame, non-finite)
   std::uint64_t send_errors = 0;      ///< command packets the socket refused to send
+  std::uint64_t sessions = 0;         ///< sessions opened (hello answered with a new nonce)
   std::uint64_t rejectedDatagrams() const;
 };
 
@@ -75,20 +79,24 @@ class ReceiverCore
 {
 public:
   /**
+   * @param key the deployment key (readKeyFile), 32..64 bytes
+   * @param nonce session nonce source (tests: deterministic)
    * @param stall_factor health() reports a stalled receive thread (STALE) when, while the thread
    *        still believes the link is streaming, no packet was handled for this many timeouts
    * @throws std::invalid_argument on invalid link parameters or wrench limits
    */
-  ReceiverCore(const LinkParams& link, const WrenchLimits& wrench, double stall_factor = 3.0);
+  ReceiverCore(const LinkParams& link, const WrenchLimits& wrench, const std::vector<std::uint8_t>& key,
+               double stall_factor = 3.0, NonceSource nonce = randomNonce);
 
   // ---- receive thread
   /// How long the receive thread may wait for a datagram [s] (TouchballLink::waitTime).
   double waitTime(double now, double idle_wake) const;
   /**
-   * Validate a datagram from @p source_ip (host order) received at @p now, stamped @p stamp_ns
-   * (the caller's clock for messages, [ns], handed to packetSince()). On Reject::NONE @p out
-   * holds the packet and the commands to answer with, and @p resumed is true if the link was
-   * STALE until now (the caller reports OK). Never allocates.
+   * Authenticate and validate a datagram from @p source_ip (host order) received at @p now, stamped
+   * @p stamp_ns (the caller's clock for messages, [ns], handed to packetSince()). On Reject::NONE
+   * @p out.kind says what it was: STATE => @p out holds the packet and the commands to answer
+   * with, and @p resumed is true if the link was STALE until now (the caller reports OK);
+   * HELLO => answer with encodeChallenge(out.session, out.console_nonce). Never allocates.
    */
   Reject accept(const std::uint8_t* data, std::size_t n, std::uint32_t source_ip, double now, std::int64_t stamp_ns,
                 AcceptedPacket& out, bool& resumed);
@@ -111,6 +119,8 @@ public:
   /// Counters and state at @p now (the same values touchball/status and /diagnostics report).
   LinkHealth health(double now) const;
   const LinkParams& linkParams() const { return params_; }
+  /// The link's HMAC (immutable after construction: usable from any thread).
+  const Hmac& mac() const { return link_.mac(); }
 
 private:
   LinkParams params_;
@@ -140,6 +150,24 @@ private:
   double t_ = 0.0;
 };
 
+/**
+ * Rate limit of the rejection log lines, per reason: at most one line per @p period [s] per
+ * reason, reporting how many of that reason were not logged since. Allocation-free (receive thread).
+ */
+class RejectLogLimiter
+{
+public:
+  explicit RejectLogLimiter(double period = 1.0) : period_(period) {}
+  /// True if a line for @p r may be written at @p now; @p suppressed = lines of r skipped since the last.
+  bool allow(Reject r, double now, std::uint64_t& suppressed);
+
+private:
+  double period_;
+  std::array<double, kRejectReasons> last_{};
+  std::array<bool, kRejectReasons> has_{};
+  std::array<std::uint64_t, kRejectReasons> skipped_{};
+};
+
 /// The health as reported on /diagnostics: level, one-line message and key/values.
 struct HealthReport
 {
@@ -160,8 +188,8 @@ const char* formatStatusText(const LinkHealth& h, const char* source, char* out,
  * The /diagnostics report of the link (keys documented in the package README):
  * "packet rate [Hz]", "packets received", "input age [ms]", "timeout [ms]", "sequence gaps",
  * "rejected datagrams", "rejected <reason>" for every Reject reason (foreign_source, size, magic,
- * version, type, crc, non_finite, quaternion, duplicate, out_of_order), "rejected wrench_cmd",
- * "command send errors", "source".
+ * version, type, mac, session, non_finite, quaternion, duplicate, out_of_order), "rejected wrench_cmd",
+ * "command send errors", "sessions opened", "source".
  */
 HealthReport describeHealth(const LinkHealth& h, double packet_rate, const char* source);
 

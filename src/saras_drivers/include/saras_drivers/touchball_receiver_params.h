@@ -24,6 +24,7 @@ struct ReceiverConfig
   int port = 5005;                           ///< UDP port of the state stream
   std::string allowed_source = "127.0.0.1";  ///< console IPv4 address; '' or '*' = any
   int command_port = 5006;                   ///< console UDP port for force commands; 0 = source port
+  std::string key_file;                      ///< deployment key (docs/touchball_protocol.md), mode 0600; required
   LinkParams link;                           ///< timeout [s], resync_after [s], twist_cutoff_hz [Hz]; source
   WrenchLimits wrench;                       ///< max_force [N], max_torque [N m], wrench_timeout [s]
   double status_rate = 10.0;                 ///< [Hz] touchball/status

@@ -1,6 +1,7 @@
 /**
  * @file touchball_link.cpp
- * @brief Touchball receiver core: validation, sequence, twist, watchdog, force latch.
+ * @brief Touchball receiver core: authentication, session, validation, sequence, twist, watchdog,
+ *        force latch.
  */
 #include "saras_drivers/touchball_link.h"
 
@@ -87,7 +88,8 @@ void TwistEstimator::update(double t, const double p[3], const double q[4])
 }
 
 // ------------------------------------------------------------------ TouchballLink
-TouchballLink::TouchballLink(const LinkParams& p) : p_(p)
+TouchballLink::TouchballLink(const LinkParams& p, const std::vector<std::uint8_t>& key, NonceSource nonce)
+  : p_(p), mac_(new Hmac(key)), nonce_(nonce)
 {
   if (!(p.timeout > 0.0) || !std::isfinite(p.timeout))
     throw std::invalid_argument("timeout must be > 0 s");
@@ -95,46 +97,71 @@ TouchballLink::TouchballLink(const LinkParams& p) : p_(p)
     throw std::invalid_argument("resync_after must be >= timeout [s]");
   if (!(p.twist_cutoff_hz >= 0.0) || !std::isfinite(p.twist_cutoff_hz))
     throw std::invalid_argument("twist_cutoff_hz must be >= 0 Hz");
+  if (nonce_ == nullptr)
+    throw std::invalid_argument("no nonce source");
   for (auto& t : twist_)
     t = TwistEstimator(p.twist_cutoff_hz);
 }
 
 Reject TouchballLink::accept(const std::uint8_t* data, std::size_t n, std::uint32_t source_ip, double now)
 {
+  kind_ = Accepted::NONE;
+  std::uint8_t type = 0;
   Reject r = Reject::NONE;
-  std::uint32_t gap = 0;
   if (!p_.any_source && source_ip != p_.source_ip)
     r = Reject::FOREIGN_SOURCE;
   else
-    r = decodeState(data, n, scratch_);
-  if (r == Reject::NONE && has_valid_ && now - last_valid_ > p_.resync_after)
-  {
-    // The console may have restarted (sequence back to 0): accept a new sequence, but only with
-    // a newer sender timestamp, so an old packet replayed after a silence is still refused.
-    if (!(scratch_.sender_time > packet_.sender_time))
-      r = Reject::OUT_OF_ORDER;
-    else
-    {
-      sequence_.reset();
-      for (auto& t : twist_)
-        t.reset();
-    }
-  }
+    r = checkFrame(data, n, *mac_, type);
   if (r == Reject::NONE)
-    r = sequence_.accept(scratch_.seq, gap);
+    r = type == kTypeHello ? onHello(data, now) : onState(data, now);
   if (r != Reject::NONE)
   {
     ++rejected_[static_cast<int>(r)];
     last_error_ = r;
-    return r;
   }
+  return r;
+}
+
+Reject TouchballLink::onHello(const std::uint8_t* data, double now)
+{
+  Hello h;
+  const Reject r = decodeHello(data, h);
+  if (r != Reject::NONE)
+    return r;
+  if (session_states_ > 0 && now - last_valid_ <= p_.resync_after)
+    return Reject::SESSION;  // a session is streaming: a second console or a replayed hello
+  // the same console asking again before its first state packet (challenge lost): same session
+  if (session_ == 0 || session_states_ > 0 || h.console_nonce != console_nonce_)
+  {
+    session_ = nonce_();
+    console_nonce_ = h.console_nonce;
+    session_states_ = 0;
+    ++sessions_;
+    sequence_.reset();
+    for (auto& t : twist_)
+      t.reset();
+  }
+  kind_ = Accepted::HELLO;
+  return Reject::NONE;
+}
+
+Reject TouchballLink::onState(const std::uint8_t* data, double now)
+{
+  Reject r = decodeState(data, session_, scratch_);
+  std::uint32_t gap = 0;
+  if (r == Reject::NONE)
+    r = sequence_.accept(scratch_.seq, gap);
+  if (r != Reject::NONE)
+    return r;
   packet_ = scratch_;
   gap_ = gap;
   for (int d = 0; d < kDevices; ++d)
     twist_[d].update(packet_.sender_time, packet_.devices[d].position, packet_.devices[d].orientation);
   ++received_;
+  ++session_states_;
   has_valid_ = true;
   last_valid_ = now;
+  kind_ = Accepted::STATE;
   return Reject::NONE;
 }
 

@@ -1,13 +1,12 @@
 /**
  * @file touchball_protocol.cpp
- * @brief Touchball UDP protocol v1: state packet decoding/validation, command packet encoding.
+ * @brief Touchball UDP protocol v2: frame and tag check, state / hello decoding and validation,
+ *        command / challenge encoding.
  */
 #include "saras_drivers/touchball_protocol.h"
 
 #include <cmath>
 #include <cstring>
-
-#include <zlib.h>
 
 namespace saras_drivers
 {
@@ -17,8 +16,23 @@ const char* const kDeviceNames[kDevices] = { "left", "right" };
 
 namespace
 {
-const char* const kRejectNames[kRejectReasons] = { "foreign_source", "size", "magic", "version", "type", "crc",
+const char* const kRejectNames[kRejectReasons] = { "foreign_source", "size", "magic", "version", "type", "mac", "session",
                                                    "non_finite", "quaternion", "duplicate", "out_of_order" };
+
+const char* const kRejectHelp[kRejectReasons] = {
+  "source address is not ~allowed_source",
+  "wrong datagram size for its type",
+  "not a Touchball packet (magic)",
+  "protocol version not 2 (version 1 is unauthenticated and refused: update the console to version 2, "
+  "docs/touchball_protocol.md)",
+  "packet type not STATE or HELLO",
+  "authentication tag invalid (forged, corrupted, or another key: check the key files of both sides)",
+  "not bound to the current session (old/other session, or a hello while a session streams)",
+  "non-finite field",
+  "quaternion norm not 1",
+  "duplicate sequence number (replay)",
+  "sequence number older than the last accepted one (replay or reordering)"
+};
 
 std::uint32_t loadU32(const std::uint8_t* p)
 {
@@ -36,6 +50,20 @@ double loadF64(const std::uint8_t* p)
   return d;
 }
 
+std::uint64_t loadU64(const std::uint8_t* p)
+{
+  std::uint64_t u = 0;
+  for (int i = 7; i >= 0; --i)
+    u = (u << 8) | p[i];
+  return u;
+}
+
+void storeU64(std::uint64_t v, std::uint8_t* p)
+{
+  for (int i = 0; i < 8; ++i)
+    p[i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
 void storeU32(std::uint32_t v, std::uint8_t* p)
 {
   for (int i = 0; i < 4; ++i)
@@ -50,7 +78,7 @@ void storeF64(double d, std::uint8_t* p)
     p[i] = static_cast<std::uint8_t>(u >> (8 * i));
 }
 
-void storeHeader(std::uint8_t type, std::uint32_t seq, double sender_time, std::uint8_t* p)
+void storeHeader(std::uint8_t type, std::uint32_t seq, double sender_time, std::uint64_t session, std::uint8_t* p)
 {
   p[0] = 'T';
   p[1] = 'B';
@@ -61,8 +89,15 @@ void storeHeader(std::uint8_t type, std::uint32_t seq, double sender_time, std::
   p[6] = p[7] = 0;  // flags
   storeU32(seq, p + 8);
   storeF64(sender_time, p + 12);
+  storeU64(session, p + 20);
 }
 }  // namespace
+
+const char* rejectHelp(Reject r)
+{
+  const int i = static_cast<int>(r);
+  return i >= 0 && i < kRejectReasons ? kRejectHelp[i] : "";
+}
 
 const char* rejectName(Reject r)
 {
@@ -70,23 +105,29 @@ const char* rejectName(Reject r)
   return i >= 0 && i < kRejectReasons ? kRejectNames[i] : "none";
 }
 
-std::uint32_t crc32(const std::uint8_t* data, std::size_t n)
+Reject checkFrame(const std::uint8_t* data, std::size_t n, const Hmac& mac, std::uint8_t& type)
 {
-  return static_cast<std::uint32_t>(::crc32(::crc32(0L, Z_NULL, 0), data, static_cast<uInt>(n)));
-}
-
-Reject decodeState(const std::uint8_t* data, std::size_t n, StatePacket& out)
-{
-  if (data == nullptr || n != kStateSize)
+  if (data == nullptr || n < 6)
     return Reject::SIZE;
   if (std::memcmp(data, "TBAL", 4) != 0)
     return Reject::MAGIC;
-  if (data[4] != kVersion)
+  if (data[4] != kVersion)  // v1 (unauthenticated) or unknown: never parsed further
     return Reject::VERSION;
-  if (data[5] != kTypeState)
+  type = data[5];
+  if (type != kTypeState && type != kTypeHello)
     return Reject::TYPE;
-  if (loadU32(data + kStateSize - 4) != crc32(data, kStateSize - 4))
-    return Reject::CRC;
+  if (n != (type == kTypeState ? kStateSize : kHelloSize))
+    return Reject::SIZE;
+  if (!mac.verify(data, n - kTagSize, data + n - kTagSize))
+    return Reject::MAC;
+  return Reject::NONE;
+}
+
+Reject decodeState(const std::uint8_t* data, std::uint64_t session, StatePacket& out)
+{
+  out.session = loadU64(data + 20);
+  if (session == 0 || out.session != session)
+    return Reject::SESSION;
   out.seq = loadU32(data + 8);
   out.sender_time = loadF64(data + 12);
   if (!std::isfinite(out.sender_time))
@@ -117,10 +158,29 @@ Reject decodeState(const std::uint8_t* data, std::size_t n, StatePacket& out)
   return Reject::NONE;
 }
 
-void encodeCommand(std::uint32_t seq, double sender_time, const std::array<DeviceCommand, kDevices>& commands,
-                   std::uint8_t* out)
+Reject decodeHello(const std::uint8_t* data, Hello& out)
 {
-  storeHeader(kTypeCommand, seq, sender_time, out);
+  out.seq = loadU32(data + 8);
+  out.sender_time = loadF64(data + 12);
+  out.console_nonce = loadU64(data + 20);
+  if (out.console_nonce == 0 || !std::isfinite(out.sender_time))
+    return Reject::SESSION;
+  return Reject::NONE;
+}
+
+Reject decodeState(const std::uint8_t* data, std::size_t n, const Hmac& mac, std::uint64_t session, StatePacket& out)
+{
+  std::uint8_t type = 0;
+  const Reject r = checkFrame(data, n, mac, type);
+  if (r != Reject::NONE)
+    return r;
+  return type == kTypeState ? decodeState(data, session, out) : Reject::TYPE;
+}
+
+void encodeCommand(std::uint32_t seq, double sender_time, std::uint64_t session,
+                   const std::array<DeviceCommand, kDevices>& commands, const Hmac& mac, std::uint8_t* out)
+{
+  storeHeader(kTypeCommand, seq, sender_time, session, out);
   for (int d = 0; d < kDevices; ++d)
   {
     std::uint8_t* p = out + kHeaderSize + d * kCommandDeviceSize;
@@ -132,7 +192,15 @@ void encodeCommand(std::uint32_t seq, double sender_time, const std::array<Devic
     }
     storeU32(c.enabled ? kCommandEnabled : 0u, p + 48);
   }
-  storeU32(crc32(out, kCommandSize - 4), out + kCommandSize - 4);
+  mac.tag(out, kCommandSize - kTagSize, out + kCommandSize - kTagSize);
+}
+
+void encodeChallenge(std::uint32_t seq, double sender_time, std::uint64_t session, std::uint64_t console_nonce,
+                     const Hmac& mac, std::uint8_t* out)
+{
+  storeHeader(kTypeChallenge, seq, sender_time, session, out);
+  storeU64(console_nonce, out + kHeaderSize);
+  mac.tag(out, kChallengeSize - kTagSize, out + kChallengeSize - kTagSize);
 }
 
 }  // namespace touchball

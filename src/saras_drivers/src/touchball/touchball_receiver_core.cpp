@@ -21,10 +21,11 @@ std::uint64_t LinkHealth::rejectedDatagrams() const
 }
 
 // ------------------------------------------------------------------ ReceiverCore
-ReceiverCore::ReceiverCore(const LinkParams& link, const WrenchLimits& wrench, double stall_factor)
+ReceiverCore::ReceiverCore(const LinkParams& link, const WrenchLimits& wrench, const std::vector<std::uint8_t>& key,
+                           double stall_factor, NonceSource nonce)
   : params_(link)
   , stall_factor_(stall_factor)
-  , link_(link)
+  , link_(link, key, nonce)
   , latches_{ { WrenchLatch(wrench.max_force, wrench.max_torque, wrench.wrench_timeout),
                 WrenchLatch(wrench.max_force, wrench.max_torque, wrench.wrench_timeout) } }
 {
@@ -43,6 +44,11 @@ Reject ReceiverCore::accept(const std::uint8_t* data, std::size_t n, std::uint32
   resumed = false;
   const Reject r = link_.accept(data, n, source_ip, now);
   if (r != Reject::NONE)
+    return r;
+  out.kind = link_.kind();
+  out.session = link_.session();
+  out.console_nonce = link_.consoleNonce();
+  if (out.kind != Accepted::STATE)
     return r;
   out.packet = link_.packet();
   for (int i = 0; i < kDevices; ++i)
@@ -120,6 +126,7 @@ LinkHealth ReceiverCore::health(double now) const
     h.rejected[i] = link_.rejected(static_cast<Reject>(i));
   h.wrench_rejected = wrench_rejected_;
   h.send_errors = send_errors_;
+  h.sessions = link_.sessions();
   return h;
 }
 
@@ -133,6 +140,25 @@ double RateMeter::update(std::uint64_t count, double now)
   count_ = count;
   t_ = now;
   return rate;
+}
+
+// ------------------------------------------------------------------ RejectLogLimiter
+bool RejectLogLimiter::allow(Reject r, double now, std::uint64_t& suppressed)
+{
+  const int i = static_cast<int>(r);
+  suppressed = 0;
+  if (i < 0 || i >= kRejectReasons)
+    return false;
+  if (has_[i] && now - last_[i] < period_)
+  {
+    ++skipped_[i];
+    return false;
+  }
+  suppressed = skipped_[i];
+  skipped_[i] = 0;
+  has_[i] = true;
+  last_[i] = now;
+  return true;
 }
 
 // ------------------------------------------------------------------ reports
@@ -177,6 +203,7 @@ HealthReport describeHealth(const LinkHealth& h, double packet_rate, const char*
     add(std::string("rejected ") + rejectName(static_cast<Reject>(i)), std::to_string(h.rejected[i]));
   add("rejected wrench_cmd", std::to_string(h.wrench_rejected));
   add("command send errors", std::to_string(h.send_errors));
+  add("sessions opened", std::to_string(h.sessions));
   add("source", source);
   return r;
 }

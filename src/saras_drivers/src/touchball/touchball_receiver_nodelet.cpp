@@ -7,8 +7,10 @@
  * ReceiverCore (validation, watchdog, force latches, counters), both ROS-free
  * (touchball_udp.h, touchball_receiver_core.h, gtests in test/touchball/).
  *
- * Listens on ~bind_address:~port for state packets (docs/touchball_protocol.md) from
- * ~allowed_source. The receive thread waits in ppoll() for a datagram or the watchdog deadline
+ * Listens on ~bind_address:~port for authenticated state packets (protocol v2,
+ * docs/touchball_protocol.md) from ~allowed_source, keyed by ~key_file (mode 0600; missing or
+ * readable by others => fatal start-up error naming the file). A console's hello is answered with
+ * a challenge carrying the session nonce (when no session streams). The receive thread waits in ppoll() for a datagram or the watchdog deadline
  * (no busy loop) and publishes every accepted packet at once, from preallocated pooled messages
  * (boost::shared_ptr: zero-copy to nodelets in the same manager, e.g. the teleoperation's
  * tf_transformer), in this order (the teleoperation path first):
@@ -29,7 +31,8 @@
  * stale state per side, published by the receive thread at the deadline itself.
  * Health: /diagnostics (diagnostic_updater, hardware_id console_link, status "<node>: console link")
  * every ~diagnostic_period (1 s) and on every OK/STALE change: packet rate, input age, counters per
- * rejection reason (keys: describeHealth() in touchball_receiver_core.h).
+ * rejection reason (keys: describeHealth() in touchball_receiver_core.h); rejection log lines at most
+ * one per second per reason, with the count of the ones not logged.
  * touch_<side>/joint_states (sensor_msgs/JointState, rviz) at ~joint_states_rate.
  * Header stamps are the receive time (ros::Time::now()). Parameters: config/touchball.yaml (units
  * there), read once by readReceiverConfig (saras_common::Params); an invalid value is a fatal
@@ -120,7 +123,7 @@ public:
   /// @param ns namespace of the node (absolute, ending in '/'): the topics are <ns>touchball/...
   TouchballReceiver(ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& ns, const std::string& name)
     : cfg_(readReceiverConfig(saras_common::Params(pnh)))
-    , core_(cfg_.link, cfg_.wrench, kStuckFactor)
+    , core_(cfg_.link, cfg_.wrench, readKeyFile(cfg_.key_file), kStuckFactor)
     , socket_(cfg_.bind_address, cfg_.port)
     , updater_(nh, pnh, name)
   {
@@ -133,8 +136,9 @@ public:
     if (cfg_.joint_states_rate > 0.0)
       js_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / cfg_.joint_states_rate),
                                        &TouchballReceiver::onJointTimer, this);
-    ROS_INFO("touchball_receiver: listening on %s:%d, accepting %s, watchdog %.0f ms", cfg_.bind_address.c_str(),
-             cfg_.port, cfg_.link.any_source ? "any source" : cfg_.allowed_source.c_str(), 1e3 * cfg_.link.timeout);
+    ROS_INFO("touchball_receiver: listening on %s:%d, accepting %s, watchdog %.0f ms, protocol v%d keyed by %s",
+             cfg_.bind_address.c_str(), cfg_.port, cfg_.link.any_source ? "any source" : cfg_.allowed_source.c_str(),
+             1e3 * cfg_.link.timeout, kVersion, cfg_.key_file.c_str());
     running_ = true;
     thread_ = std::thread(&TouchballReceiver::run, this);
   }
@@ -267,9 +271,12 @@ private:
     const Reject r = core_.accept(data, n, src.ip, now, static_cast<std::int64_t>(stamp.toNSec()), last_, resumed);
     if (r != Reject::NONE)
     {
-      char from[32];
-      ROS_ERROR_THROTTLE(1.0, "touchball_receiver: rejected datagram from %s: %s",
-                         formatEndpoint(src, from, sizeof from), rejectName(r));
+      logReject(r, src, now);
+      return;
+    }
+    if (last_.kind == Accepted::HELLO)
+    {
+      sendChallenge(src);
       return;
     }
     if (cfg_.publish_tf)
@@ -281,6 +288,29 @@ private:
       std::lock_guard<std::mutex> lock(status_mutex_);
       publishStatus(core_.health(now));
     }
+  }
+
+  /// One line per reason per second at most (with the number not logged since).
+  void logReject(Reject r, const Endpoint& src, double now)
+  {
+    std::uint64_t suppressed = 0;
+    if (!reject_log_.allow(r, now, suppressed))
+      return;
+    char from[32];
+    ROS_ERROR("touchball_receiver: rejected datagram from %s: %s: %s (+%llu more not logged)",
+              formatEndpoint(src, from, sizeof from), rejectName(r), rejectHelp(r),
+              static_cast<unsigned long long>(suppressed));
+  }
+
+  /// Answer a hello: the session nonce for the console's nonce, to the command port.
+  void sendChallenge(const Endpoint& src)
+  {
+    encodeChallenge(++cmd_seq_, wallTime(), last_.session, last_.console_nonce, core_.mac(), challenge_buf_.data());
+    const Endpoint dest = commandDestination(src, static_cast<std::uint16_t>(cfg_.command_port));
+    char to[32];
+    ROS_INFO_THROTTLE(1.0, "touchball_receiver: session opened for the console at %s", formatEndpoint(dest, to, sizeof to));
+    if (socket_.sendTo(challenge_buf_.data(), challenge_buf_.size(), dest) != 0)
+      core_.countSendError();
   }
 
   /// Watchdog: STALE status first (consumers hold), then a stale=true state per side.
@@ -316,7 +346,7 @@ private:
 
   void sendCommand(const Endpoint& src)
   {
-    encodeCommand(++cmd_seq_, wallTime(), last_.commands, cmd_buf_.data());
+    encodeCommand(++cmd_seq_, wallTime(), last_.session, last_.commands, core_.mac(), cmd_buf_.data());
     const Endpoint dest = commandDestination(src, static_cast<std::uint16_t>(cfg_.command_port));
     const int err = socket_.sendTo(cmd_buf_.data(), cmd_buf_.size(), dest);
     if (err != 0)
@@ -467,6 +497,8 @@ private:
   std::atomic<bool> running_{ false };
   AcceptedPacket last_;
   std::array<std::uint8_t, kCommandSize> cmd_buf_{};
+  std::array<std::uint8_t, kChallengeSize> challenge_buf_{};
+  RejectLogLimiter reject_log_;
   std::uint32_t cmd_seq_ = 0;
   // callback queue only:
   LinkLevel diagnosed_level_ = LinkLevel::STALE;

@@ -35,6 +35,9 @@ ReceiverConfig readReceiverConfig(const saras_common::Params& p)
   if (!c.link.any_source)
     c.link.source_ip = address(p, "allowed_source", c.allowed_source);
   c.command_port = p.integer("command_port", c.command_port, "", { inRange(0, 65535) });
+  c.key_file = p.text("key_file", c.key_file);
+  if (c.key_file.empty())
+    p.fail("key_file", "''", "", "the path of the console link key file");
   c.link.timeout = p.number("timeout", c.link.timeout, "s", { positive() });
   c.link.resync_after = p.number("resync_after", c.link.resync_after, "s", { positive() });
   if (c.link.resync_after < c.link.timeout)

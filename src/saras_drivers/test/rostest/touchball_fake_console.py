@@ -1,6 +1,7 @@
-"""Helpers for the touchball rostests: a fake console that sends protocol packets (the same
-touchball_protocol module as everything else) and records the command packets it gets back, and
-a recorder of the receiver's /diagnostics status."""
+"""Helpers for the touchball rostests: a fake console that runs the v2 handshake and sends
+authenticated protocol packets (the same touchball_protocol / touchball_session modules as
+everything else) and records the command packets it gets back, and a recorder of the receiver's
+/diagnostics status. The key comes from the test's ~key_file (the receiver's key)."""
 import math
 import socket
 import threading
@@ -9,7 +10,9 @@ import time
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 
+from saras_drivers import keys
 from saras_drivers import touchball_protocol as tp
+from saras_drivers.touchball_session import ConsoleSession
 
 #: name of the receiver's status on /diagnostics ("<node name>: <task>")
 DIAGNOSTIC_NAME = 'touchball_receiver: console link'
@@ -66,7 +69,11 @@ def device(t, offset=0.0):
 
 
 class FakeConsole(object):
-    def __init__(self, port, command_port, source='127.0.0.1'):
+    """:param key: deployment key (default: the test's ~key_file); ``connect()`` runs the handshake."""
+
+    def __init__(self, port, command_port, source='127.0.0.1', key=None):
+        self.mac = tp.Mac(key if key is not None else keys.read_key_file(rospy.get_param('~key_file')))
+        self.session = ConsoleSession(self.mac)
         self.dest = ('127.0.0.1', port)
         self.tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.tx.bind((source, 0))
@@ -78,7 +85,9 @@ class FakeConsole(object):
         self.epoch = time.time()       # sender_time = wall clock, as the real controller sends
         self.sent = {}
         self.send_wall = []            # wall time just before each sendto [s]
-        self.commands = []
+        self.commands = []             # (monotonic time, command datagram) with a valid tag and session
+        self.received = []             # every datagram from the receiver
+        self.lock = threading.Lock()
         self._stop = threading.Event()
         self._rx_thread = threading.Thread(target=self._receive, daemon=True)
         self._rx_thread.start()
@@ -91,14 +100,35 @@ class FakeConsole(object):
                 continue
             except OSError:
                 return
-            self.commands.append((time.monotonic(), data))
+            now = time.monotonic()
+            self.received.append((now, data))
+            with self.lock:
+                kind = self.session.handle(data, now)
+            if kind == 'command':
+                self.commands.append((now, data))
+
+    @property
+    def session_nonce(self):
+        return self.session.session
+
+    def connect(self, timeout=10.0):
+        """Send hellos until a challenge binds the session; True when bound."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            with self.lock:
+                if self.session.bound:
+                    return True
+                hello = tp.pack_hello(self.mac, self.session.console_nonce, self.seq, time.time())
+            self.tx.sendto(hello, self.dest)
+            time.sleep(0.1)
+        return self.session.bound
 
     def send_raw(self, data):
         self.tx.sendto(data, self.dest)
 
     def send(self, t):
         devs = (device(t), device(t, 0.01))
-        data = tp.pack_state(self.seq, self.epoch + t, devs)
+        data = tp.pack_state(self.mac, self.session.session or 0, self.seq, self.epoch + t, devs)
         self.sent[self.seq] = devs
         self.seq += 1
         self.send_wall.append(time.time())

@@ -100,7 +100,7 @@ class TestRate(unittest.TestCase):
     def check_commands(self, console, accepted):
         # one command per accepted packet; the wrench came back on the left device only
         self.assertEqual(len(console.commands), accepted)
-        cmds = [tp.unpack_command(d) for _, d in console.commands]
+        cmds = [tp.unpack_command(d, console.mac) for _, d in console.commands]
         enabled = [c.devices[0] for c in cmds if c.devices[0].enabled]
         self.assertTrue(enabled, 'no enabled force command came back')
         self.assertEqual(enabled[0].force, (1.0, 0.0, -2.0))
@@ -119,6 +119,7 @@ class TestRate(unittest.TestCase):
         js_rate = rospy.get_param('~joint_states_rate')
         wrench_pub = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=1)
         console = FakeConsole(self.port, self.cmd_port)
+        self.assertTrue(console.connect(), 'no session (handshake)')
         time.sleep(1.5)
         received0 = self.diag.fresh()[2]['packets received']
         console.stream(RATE, 0.3)                          # warm-up (link valid again)

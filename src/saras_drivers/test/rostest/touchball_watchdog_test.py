@@ -51,6 +51,7 @@ class TestWatchdog(unittest.TestCase):
                          lambda m: m.stale and stale_states.append(time.time()), queue_size=2000)
         diag = LinkDiagnostics()
         console = FakeConsole(port, rospy.get_param('~command_port'))
+        self.assertTrue(console.connect(), 'no session (handshake)')
         time.sleep(1.0)
         detect, arrive, ages = [], [], []
         for trial in range(TRIALS):

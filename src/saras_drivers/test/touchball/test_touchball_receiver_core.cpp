@@ -30,6 +30,24 @@ LinkParams linkParams()
   return p;
 }
 
+std::uint64_t testNonce()
+{
+  return touchball_test::kSession;
+}
+
+/// Answer the test console's hello: the session kSession is open.
+void openSession(ReceiverCore& core)
+{
+  AcceptedPacket out;
+  bool resumed = false;
+  const auto h = touchball_test::hello();
+  ASSERT_EQ(core.accept(h.data(), h.size(), kLocal, 0.0, 0, out, resumed), Reject::NONE);
+  ASSERT_EQ(out.kind, Accepted::HELLO);
+  ASSERT_EQ(out.session, touchball_test::kSession);
+  ASSERT_EQ(out.console_nonce, touchball_test::kConsoleNonce);
+  ASSERT_FALSE(resumed);
+}
+
 std::map<std::string, std::string> asMap(const HealthReport& r)
 {
   return std::map<std::string, std::string>(r.values.begin(), r.values.end());
@@ -38,12 +56,13 @@ std::map<std::string, std::string> asMap(const HealthReport& r)
 
 TEST(ReceiverCore, AcceptHandsOutPacketTwistAndCommands)
 {
-  ReceiverCore core(linkParams(), WrenchLimits{ 2.0, 0.0, 0.1 });
+  ReceiverCore core(linkParams(), WrenchLimits{ 2.0, 0.0, 0.1 }, touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   const double force[3] = { 3.0, 0.0, 4.0 }, torque[3] = { 1.0, 0.0, 0.0 };
   EXPECT_TRUE(core.setWrench(kLeft, force, torque, 0.0));
   AcceptedPacket out;
   bool resumed = false;
-  const auto d = Builder(7, 1.0).f64(20, -0.11).done();
+  const auto d = Builder(7, 1.0).f64(28, -0.11).done();
   ASSERT_EQ(core.accept(d.data(), d.size(), kLocal, 0.05, 123456789, out, resumed), Reject::NONE);
   EXPECT_TRUE(resumed);  // the link starts STALE
   EXPECT_EQ(out.packet.seq, 7u);
@@ -53,7 +72,7 @@ TEST(ReceiverCore, AcceptHandsOutPacketTwistAndCommands)
   EXPECT_DOUBLE_EQ(out.commands[kLeft].torque[0], 0.0);
   EXPECT_FALSE(out.commands[kRight].enabled);
   // the next packet 10 ms later (sender time): twist from the position step, link already OK
-  const auto e = Builder(8, 1.01).f64(20, -0.10).done();
+  const auto e = Builder(8, 1.01).f64(28, -0.10).done();
   ASSERT_EQ(core.accept(e.data(), e.size(), kLocal, 0.06, 0, out, resumed), Reject::NONE);
   EXPECT_FALSE(resumed);
   EXPECT_GT(out.linear[kLeft][0], 0.0);
@@ -69,7 +88,8 @@ TEST(ReceiverCore, AcceptHandsOutPacketTwistAndCommands)
 
 TEST(ReceiverCore, WatchdogDeclaresStaleOnceAndResumes)
 {
-  ReceiverCore core(linkParams(), WrenchLimits());
+  ReceiverCore core(linkParams(), WrenchLimits(), touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   EXPECT_TRUE(core.stale());
   EXPECT_FALSE(core.watchdog(100.0));  // never streamed: already STALE, nothing to declare
   AcceptedPacket out;
@@ -91,15 +111,16 @@ TEST(ReceiverCore, WatchdogDeclaresStaleOnceAndResumes)
 
 TEST(ReceiverCore, HealthCountsEveryRejectionByReason)
 {
-  ReceiverCore core(linkParams(), WrenchLimits());
+  ReceiverCore core(linkParams(), WrenchLimits(), touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   AcceptedPacket out;
   bool resumed;
   const auto good = Builder(1, 1.0).done();
-  auto bad_crc = good;
-  bad_crc[30] ^= 1;
+  auto bad_mac = good;
+  bad_mac[30] ^= 1;
   core.accept(good.data(), good.size(), kLocal, 1.0, 0, out, resumed);
   core.accept(good.data(), good.size(), kLocal, 1.001, 0, out, resumed);            // duplicate
-  core.accept(bad_crc.data(), bad_crc.size(), kLocal, 1.002, 0, out, resumed);      // crc
+  core.accept(bad_mac.data(), bad_mac.size(), kLocal, 1.002, 0, out, resumed);      // mac
   core.accept(good.data(), 20, kLocal, 1.003, 0, out, resumed);                     // size
   core.accept(good.data(), good.size(), 0x0a000001, 1.004, 0, out, resumed);       // foreign source
   const double nan3[3] = { std::nan(""), 0.0, 0.0 }, zero[3] = { 0.0, 0.0, 0.0 };
@@ -110,7 +131,7 @@ TEST(ReceiverCore, HealthCountsEveryRejectionByReason)
   EXPECT_EQ(h.level, LinkLevel::OK);
   EXPECT_EQ(h.received, 1u);
   EXPECT_EQ(h.rejected[static_cast<int>(Reject::DUPLICATE)], 1u);
-  EXPECT_EQ(h.rejected[static_cast<int>(Reject::CRC)], 1u);
+  EXPECT_EQ(h.rejected[static_cast<int>(Reject::MAC)], 1u);
   EXPECT_EQ(h.rejected[static_cast<int>(Reject::SIZE)], 1u);
   EXPECT_EQ(h.rejected[static_cast<int>(Reject::FOREIGN_SOURCE)], 1u);
   EXPECT_EQ(h.rejectedDatagrams(), 4u);
@@ -127,13 +148,14 @@ TEST(ReceiverCore, HealthCountsEveryRejectionByReason)
   EXPECT_EQ(kv.at("input age [ms]"), "10.0");
   EXPECT_EQ(kv.at("timeout [ms]"), "30.0");
   EXPECT_EQ(kv.at("rejected datagrams"), "4");
-  EXPECT_EQ(kv.at("rejected crc"), "1");
+  EXPECT_EQ(kv.at("rejected mac"), "1");
   EXPECT_EQ(kv.at("rejected duplicate"), "1");
   EXPECT_EQ(kv.at("rejected size"), "1");
   EXPECT_EQ(kv.at("rejected foreign_source"), "1");
   EXPECT_EQ(kv.at("rejected out_of_order"), "0");
   EXPECT_EQ(kv.at("rejected wrench_cmd"), "2");
   EXPECT_EQ(kv.at("command send errors"), "1");
+  EXPECT_EQ(kv.at("sessions opened"), "1");
   EXPECT_EQ(kv.at("source"), "127.0.0.1:5005");
   for (int i = 0; i < kRejectReasons; ++i)
     EXPECT_EQ(kv.count(std::string("rejected ") + rejectName(static_cast<Reject>(i))), 1u) << i;
@@ -141,7 +163,8 @@ TEST(ReceiverCore, HealthCountsEveryRejectionByReason)
 
 TEST(ReceiverCore, StatusTextAndStalledReceiveThread)
 {
-  ReceiverCore core(linkParams(), WrenchLimits(), 3.0);
+  ReceiverCore core(linkParams(), WrenchLimits(), touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   char text[160];
   LinkHealth h = core.health(0.0);
   EXPECT_EQ(h.level, LinkLevel::STALE);
@@ -167,7 +190,8 @@ TEST(ReceiverCore, StatusTextAndStalledReceiveThread)
 
 TEST(ReceiverCore, PacketSinceReportsEachNewPacketOnce)
 {
-  ReceiverCore core(linkParams(), WrenchLimits());
+  ReceiverCore core(linkParams(), WrenchLimits(), touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   std::uint64_t seen = 0;
   StatePacket p;
   std::int64_t stamp = 0;
@@ -186,7 +210,8 @@ TEST(ReceiverCore, ConcurrentWrenchUpdatesAndAccepts)
 {
   // the callback queue sets commands while the receive thread accepts: every handed-out command is
   // one that was set (never torn), and nothing is lost from the counters
-  ReceiverCore core(linkParams(), WrenchLimits{ 100.0, 0.0, 10.0 });
+  ReceiverCore core(linkParams(), WrenchLimits{ 100.0, 0.0, 10.0 }, touchball_test::testKey(), 3.0, testNonce);
+  openSession(core);
   std::atomic<bool> stop{ false };
   std::thread writer([&] {
     for (int k = 0; !stop; ++k)

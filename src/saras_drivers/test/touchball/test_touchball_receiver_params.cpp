@@ -16,8 +16,12 @@ namespace
 {
 using Values = std::map<std::string, XmlRpc::XmlRpcValue>;
 
-saras_common::Params paramsOf(const Values& values)
+/// Parameters @p given, plus a key_file unless given (or @p with_key is false).
+saras_common::Params paramsOf(const Values& given, bool with_key = true)
 {
+  Values values = given;
+  if (with_key)
+    values.emplace("key_file", XmlRpc::XmlRpcValue("/etc/saras/console.key"));
   return saras_common::Params(
       [values](const std::string& n, XmlRpc::XmlRpcValue& v) {
         const auto it = values.find(n);
@@ -30,11 +34,11 @@ saras_common::Params paramsOf(const Values& values)
 }
 
 /// The error message for @p values, or "accepted".
-std::string error(const Values& values)
+std::string error(const Values& values, bool with_key = true)
 {
   try
   {
-    readReceiverConfig(paramsOf(values));
+    readReceiverConfig(paramsOf(values, with_key));
   }
   catch (const saras_common::ParamError& e)
   {
@@ -76,4 +80,5 @@ TEST(ReceiverParams, BadValuesNameParameterValueUnitAndRule)
   EXPECT_NE(error({ { "realtime_priority", XmlRpc::XmlRpcValue(100) } }).find("realtime_priority"), std::string::npos);
   EXPECT_NE(error({ { "status_rate", XmlRpc::XmlRpcValue(0.0) } }).find("status_rate"), std::string::npos);
   EXPECT_EQ(error({ { "joint_states_rate", XmlRpc::XmlRpcValue(0.0) } }), "accepted");  // 0 = off
+  EXPECT_NE(error({}, false).find("/touchball_receiver/key_file"), std::string::npos);  // no key: no start
 }

@@ -10,7 +10,8 @@ Pieces (each testable alone):
   pulling the device toward the intended position; the commanded force acts on the device mass.
 * :class:`ConsoleCalibration` -- the real controller's calibration: position/orientation offsets
   per device and clip-range calibration (raw Simball clip reading -> angle).
-* :class:`TouchballConsole` -- ties them together and produces protocol packets.
+* :class:`TouchballConsole` -- ties them together and produces protocol packets (protocol v2:
+  authenticated, session handshake through :class:`saras_drivers.touchball_session.ConsoleSession`).
 
 Units: metres, radians, seconds, kilograms, newtons. Frames: touch_<side>/base (z up, x away from
 the user, y left).
@@ -20,6 +21,7 @@ import csv
 import math
 
 from saras_drivers import touchball_protocol as tp
+from saras_drivers.touchball_session import ConsoleSession
 
 
 def quat_mul(a, b):
@@ -277,45 +279,41 @@ class ConsoleCalibration(object):
 
 
 class TouchballConsole(object):
-    """The simulated controller: intentions -> device models -> calibrated packets.
+    """The simulated controller: intentions -> device models -> calibrated, authenticated packets.
 
     :param sources: (left, right) callables t -> :class:`Intention`.
+    :param mac: :class:`touchball_protocol.Mac` of the deployment key.
     :param command_timeout: a force command older than this [s] is dropped (zero force).
+    :param rebind_after: no valid command for this long [s] => new handshake (ConsoleSession).
     """
 
-    def __init__(self, sources, models=None, calibrations=None, command_timeout=0.1):
+    def __init__(self, sources, mac, models=None, calibrations=None, command_timeout=0.1, rebind_after=1.0):
         self.sources = tuple(sources)
         self.models = tuple(models) if models else (HandDeviceModel(), HandDeviceModel())
         self.calibrations = tuple(calibrations) if calibrations else (ConsoleCalibration(),
                                                                       ConsoleCalibration())
         self.command_timeout = float(command_timeout)
-        self.seq = 0
+        self.session = ConsoleSession(mac, rebind_after=rebind_after)
         self.t = 0.0
-        self._commands = (tp.ZERO_COMMAND, tp.ZERO_COMMAND)
-        self._command_time = None
-        self._last_command_seq = tp.SequenceTracker()
-        self.commands_received = 0
-        self.commands_rejected = 0
+
+    @property
+    def commands_received(self):
+        return self.session.commands_received
+
+    @property
+    def commands_rejected(self):
+        return self.session.commands_rejected
 
     def handle_command(self, data, now):
-        """Validate a command datagram (any defect => counted and ignored)."""
-        try:
-            pkt = tp.unpack_command(bytes(data))
-            if self._command_time is None or now - self._command_time > 1.0:
-                self._last_command_seq.reset()
-            self._last_command_seq.accept(pkt.seq)
-        except tp.ProtocolError:
-            self.commands_rejected += 1
-            return False
-        self._commands = pkt.devices
-        self._command_time = now
-        self.commands_received += 1
-        return True
+        """Handle a datagram of the ROS side (challenge or command; any defect => counted, ignored).
+        True if it was valid."""
+        return self.session.handle(data, now) is not None
 
     def active_forces(self, now):
-        if self._command_time is None or now - self._command_time > self.command_timeout:
+        t = self.session.command_time
+        if t is None or now - t > self.command_timeout or not self.session.bound:
             return ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
-        return tuple(c.force if c.enabled else (0.0, 0.0, 0.0) for c in self._commands)
+        return tuple(c.force if c.enabled else (0.0, 0.0, 0.0) for c in self.session.commands)
 
     def step(self, dt, now=None):
         """Advance the simulation by dt [s]; returns the (left, right) DeviceState."""
@@ -330,8 +328,7 @@ class TouchballConsole(object):
             states.append(tp.DeviceState(p, q, cal.clip_angle(it.clip_raw), it.clutch, it.clip_button))
         return tuple(states)
 
-    def packet(self, devices, sender_time):
-        """Encode the next state packet (sequence number increments, wraps at 2^32)."""
-        data = tp.pack_state(self.seq, sender_time, devices)
-        self.seq = (self.seq + 1) & 0xFFFFFFFF
-        return data
+    def packet(self, devices, sender_time, now=None):
+        """The next datagram: a state packet once a session is bound, else a hello when one is due
+        (None in between). ``now``: monotonic time [s] (default: the simulation time)."""
+        return self.session.outgoing(devices, sender_time, self.t if now is None else now)
