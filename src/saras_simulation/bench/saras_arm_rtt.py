@@ -25,12 +25,15 @@ from saras_drivers.saras_arm_client import SarasArmClient
 from saras_simulation.saras_arm_model import SarasArmModel
 from saras_simulation.saras_arm_server import SarasArmServer
 
+KEY = bytes(range(32))   # the arm link key of these tests
+ARM = 'mesa_left'
+
 PA = [0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0]
 
 
 def serve(port, ready):
     model = SarasArmModel(sak.load('left', PA), max_velocity=3.0)
-    server = SarasArmServer(model, '127.0.0.1', port, 600.0, 300.0)
+    server = SarasArmServer(model, '127.0.0.1', port, 600.0, 300.0, key=KEY)
     ready.set()
     server.run()
 
@@ -68,7 +71,7 @@ def main():
             seen[st['target_id']] = time.perf_counter()
             cond.notify_all()
 
-    client = SarasArmClient('http://127.0.0.1:%d' % port, on_state=on_state, subscribe_state=True,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, on_state=on_state, subscribe_state=True,
                             hold_on_connect=False)
     client.start()
     try:

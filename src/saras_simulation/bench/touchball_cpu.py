@@ -33,25 +33,26 @@ def main():
     ap.add_argument('--repeat', type=int, default=5)
     args, _ = ap.parse_known_args()
     n = args.n
-    console = TouchballConsole([ScriptedMotion(), ScriptedMotion(phase=2.5)],
+    mac = tp.Mac(bytes(range(32)))
+    console = TouchballConsole([ScriptedMotion(), ScriptedMotion(phase=2.5)], mac,
                                [HandDeviceModel(), HandDeviceModel()],
                                [ConsoleCalibration(), ConsoleCalibration()], 0.1)
+    session = 0x0123456789ABCDEF
+    console.session.session = session              # bound (the handshake is not measured)
+    console.session._alive = float('inf')
     packets = [console.packet(console.step(0.001, k * 1e-3), 1000.0 + k * 1e-3) for k in range(n)]
-    cmd = tp.pack_command(1, 0.0, (tp.ZERO_COMMAND, tp.ZERO_COMMAND))
-
-    # getattr: the same script measures an earlier version of the modules (PYTHONPATH overlay)
-    decode_state = getattr(tp, 'decode_state', tp.unpack_state)
+    cmd = tp.pack_command(mac, session, 1, 0.0, (tp.ZERO_COMMAND, tp.ZERO_COMMAND))
 
     def decode():
         for data in packets:
-            decode_state(data)
+            tp.decode_state(data, mac, session)
 
     def tick():
         for k in range(n):
             console.handle_command(cmd, k * 1e-3)
             console.packet(console.step(0.001, k * 1e-3), 0.0)
 
-    rows = [('decode_state (unpack_state before) only', best_us(decode, n, args.repeat)),
+    rows = [('decode_state (with HMAC check) only', best_us(decode, n, args.repeat)),
             ('console simulator tick (no I/O)', best_us(tick, n, args.repeat))]
     print('Touchball cores, CPU per packet (process_time, best of %d x %d); /proc/loadavg %s (%d CPUs)'
           % (args.repeat, n, ' '.join(open('/proc/loadavg').read().split()[:3]), os.cpu_count()))

@@ -7,10 +7,14 @@ import numpy as np
 import pytest
 
 from saras_drivers import saras_arm_kinematics as sak
+from saras_drivers import saras_arm_auth as auth
 from saras_drivers import saras_arm_protocol as proto
 from saras_drivers.saras_arm_client import NotConnected, SarasArmClient
 from saras_simulation.saras_arm_model import SarasArmModel
 from saras_simulation.saras_arm_server import SarasArmServer
+
+KEY = bytes(range(32))   # the arm link key of these tests
+ARM = 'mesa_left'
 
 #: A Positioning-Arm set-up pose [rad] (independent of saras_description's YAML).
 PA = [0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0]
@@ -37,10 +41,10 @@ def _wait(pred, timeout):
 def link():
     model = SarasArmModel(sak.load('left', PA), max_velocity=2.0)
     port = _free_port()
-    server = SarasArmServer(model, port=port, rate=500.0, state_rate=250.0)
+    server = SarasArmServer(model, port=port, rate=500.0, state_rate=250.0, key=KEY)
     server.start_in_thread()
     states, errors = [], []
-    client = SarasArmClient('http://127.0.0.1:%d' % port, on_state=states.append,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, on_state=states.append,
                             on_error=errors.append, subscribe_state=True, backoff_initial=0.05,
                             backoff_max=0.2)
     client.start()
@@ -95,7 +99,7 @@ def test_commander_disconnect_holds_and_client_reconnects(link):
 
 
 def test_commands_refused_while_disconnected():
-    client = SarasArmClient('http://127.0.0.1:%d' % _free_port(), backoff_initial=0.05, backoff_max=0.1)
+    client = SarasArmClient('http://127.0.0.1:%d' % _free_port(), KEY, ARM, backoff_initial=0.05, backoff_max=0.1)
     client.start()
     try:
         assert not client.send_target((0, 0, 0))
@@ -109,7 +113,7 @@ def test_commands_refused_while_disconnected():
 def _stream(state_rate=250.0, **server_kw):
     model = SarasArmModel(sak.load('left', PA), max_velocity=2.0)
     port = _free_port()
-    server = SarasArmServer(model, port=port, rate=500.0, state_rate=state_rate, **server_kw)
+    server = SarasArmServer(model, port=port, rate=500.0, state_rate=state_rate, **server_kw, key=KEY)
     server.start_in_thread()
     return model, server, port
 
@@ -122,7 +126,7 @@ def _stall_server(server, seconds):
 def test_states_in_order_from_one_thread_without_gaps():
     model, server, port = _stream()
     seen = []
-    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             on_state=lambda s: seen.append((threading.get_ident(), s['seq'], s['time'])))
     client.start()
     try:
@@ -146,7 +150,7 @@ def test_server_stall_keeps_rate_and_sample_times():
     # integrated to and stamped with its own instant
     model, server, port = _stream(max_catch_up=50)
     seen = []
-    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             on_state=seen.append)
     client.start()
     try:
@@ -190,9 +194,9 @@ def test_overloaded_server_grid_stays_on_real_time():
         await emit(*args, **kwargs)
     server.sio.emit = slow_emit
     got = []
-    reader = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+    reader = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             on_state=lambda s: got.append((time.time(), s['time'])))
-    commander = SarasArmClient('http://127.0.0.1:%d' % port, hold_on_connect=False)
+    commander = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, hold_on_connect=False)
     reader.start()
     commander.start()
     try:
@@ -223,7 +227,7 @@ def test_overloaded_server_grid_stays_on_real_time():
 def test_stale_set_point_is_counted_and_not_executed():
     # a set_target stamped 1 s ago (max_target_age 0.1 s) is dropped and counted; a fresh one runs
     model, server, port = _stream(max_target_age=0.1)
-    commander = SarasArmClient('http://127.0.0.1:%d' % port, hold_on_connect=False)
+    commander = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, hold_on_connect=False)
     commander.start()
     try:
         assert commander.wait_connected(5.0)
@@ -263,7 +267,7 @@ def test_slow_consumer_bounded_queue_and_link_kept():
         seen.append(s['seq'])
         time.sleep(0.02)
 
-    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             on_state=slow, state_queue=5)
     client.start()
     try:
@@ -300,7 +304,7 @@ def test_slow_reader_state_age_bounded_by_flow_control(window):
     # socket buffers hold a growing backlog (measured 2.7 s at the end)
     model, server, port = _stream(state_rate=300.0)
     got = []
-    client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             state_window=window,
                             on_state=lambda s: got.append((time.time(), time.time() - s['time'], s['seq'])))
     _slow_reader(client, 0.01)
@@ -332,7 +336,8 @@ def test_malformed_flow_control_refused_and_counted():
     seen = []
     sio.on(proto.EV_STATE, seen.append)
     try:
-        sio.connect('http://127.0.0.1:%d' % port, transports=['websocket'], wait_timeout=2)
+        sio.connect('http://127.0.0.1:%d' % port, transports=['websocket'], wait_timeout=2,
+                    auth=auth.make_auth(KEY, ARM, 'monitor'))
         r = sio.call(proto.EV_SUBSCRIBE_STATE, {'window': -2}, timeout=2.0)
         assert not r['ok'] and r['code'] == proto.BAD_PAYLOAD and not server.subscribers
         for bad in ({'received': 'x'}, None, [1], {'received': -1}):
@@ -352,7 +357,7 @@ def test_malformed_flow_control_refused_and_counted():
 
 def test_server_stall_shorter_than_ping_timeout_keeps_link():
     model, server, port = _stream(ping_interval=0.2, ping_timeout=1.5)
-    client = SarasArmClient('http://127.0.0.1:%d' % port, backoff_initial=0.05, backoff_max=0.1)
+    client = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, backoff_initial=0.05, backoff_max=0.1)
     client.start()
     try:
         assert client.wait_connected(5.0)

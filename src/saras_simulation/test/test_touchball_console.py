@@ -84,21 +84,31 @@ def test_replay_interpolates(tmp_path):
         TrajectoryReplay.from_csv(str(bad), 'left')
 
 
-def test_console_stream_and_forces():
+KEY = bytes(range(32))
+S = 0x0123456789ABCDEF
+
+
+def test_console_handshake_stream_and_forces():
     still = lambda t: Intention((0.0, 0.0, 0.1), (0, 0, 0, 1), 1.0)
-    con = TouchballConsole((still, still))
+    mac = tp.Mac(KEY)
+    con = TouchballConsole((still, still), mac)
     for _ in range(10):
         devs = con.step(0.001)
-    pkt = tp.unpack_state(con.packet(devs, 0.01))
-    assert pkt.seq == 0 and con.seq == 1
+    hello = con.packet(devs, 0.01)                           # unbound: a hello first
+    _seq, _t, nonce = tp.unpack_hello(hello, mac)
+    assert con.packet(devs, 0.01) is None                    # no state packet without a session
+    assert con.handle_command(tp.pack_challenge(mac, S, nonce, 0, 0.0), con.t)
+    pkt = tp.unpack_state(con.packet(devs, 0.02), mac, S)
+    assert pkt.seq == 1
     assert pkt.devices[0].position == pytest.approx((0, 0, 0.1))
     # a force command on the left device pushes it by F/k at equilibrium; right unaffected
-    cmd = tp.pack_command(1, 0.0, (tp.DeviceCommand((0.0, 0.0, 3.0), (0, 0, 0), True), tp.ZERO_COMMAND))
+    push = (tp.DeviceCommand((0.0, 0.0, 3.0), (0, 0, 0), True), tp.ZERO_COMMAND)
+    cmd = tp.pack_command(mac, S, 1, 0.0, push)
     assert not con.handle_command(cmd[:-1], 0.0)
-    assert con.commands_rejected == 1
+    assert not con.handle_command(tp.pack_command(tp.Mac(bytes(32)), S, 1, 0.0, push), 0.0)   # forged
+    assert con.commands_rejected == 2
     for k in range(3000):
-        con.handle_command(tp.pack_command(k + 2, 0.0, (tp.DeviceCommand((0.0, 0.0, 3.0), (0, 0, 0), True),
-                                                        tp.ZERO_COMMAND)), con.t)
+        con.handle_command(tp.pack_command(mac, S, k + 2, 0.0, push), con.t)
         devs = con.step(0.001)
     assert devs[0].position[2] == pytest.approx(0.1 + 3.0 / 300.0, abs=1e-5)
     assert devs[1].position[2] == pytest.approx(0.1, abs=1e-9)

@@ -7,6 +7,9 @@
   after a reconnection nothing is replayed. On every (re)connection the client sends ``hold``
   (if ``hold_on_connect``) so the arm stays where it is until a fresh command arrives.
 * Validates every ``state`` event with :mod:`saras_arm_protocol` before handing it on.
+* Authenticates every connection (:mod:`saras_arm_auth`: a fresh connect ``auth`` payload, HMAC of
+  the arm link's key, in ``role`` command or monitor); ``tls_ca_file`` (with an ``https://`` URL)
+  verifies the server's certificate against that CA (wss).
 
 Threads and load (why the stock python-socketio client is not used as is): python-engineio 4.3's
 threaded client starts a new thread for every received message, so a 300 Hz ``state`` stream
@@ -34,6 +37,9 @@ import engineio
 import socketio
 from engineio import packet as eio_packet
 
+import requests
+
+from saras_drivers import saras_arm_auth as auth
 from saras_drivers import saras_arm_protocol as proto
 
 
@@ -79,15 +85,19 @@ class SarasArmClient(object):
     ``on_error(dict)`` and ``on_connection(bool)`` from the reader/supervisor threads (they must
     not block)."""
 
-    def __init__(self, url, on_state=None, on_error=None, on_connection=None,
+    def __init__(self, url, key, arm, on_state=None, on_error=None, on_connection=None,
                  subscribe_state=False, hold_on_connect=True, backoff_initial=0.2,
-                 backoff_max=5.0, logger=None, state_queue=30, state_window=30):
+                 backoff_max=5.0, logger=None, state_queue=30, state_window=30, role='command',
+                 tls_ca_file=''):
         if not 0.0 < backoff_initial <= backoff_max:
             raise ValueError('need 0 < backoff_initial <= backoff_max')
         if not int(state_queue) >= 1:
             raise ValueError('state_queue must be >= 1')
         if not int(state_window) >= 0:
             raise ValueError('state_window must be >= 0 (0 = no flow control)')
+        if role not in auth.ROLES:
+            raise ValueError('role must be one of %s' % (auth.ROLES,))
+        self.key, self.arm, self.role = bytes(key), arm, role
         self.state_window = int(state_window)
         self._ack_every = max(1, self.state_window // 3)
         self._conn_received = 0        # states received on the current connection (state_ack)
@@ -101,8 +111,12 @@ class SarasArmClient(object):
         self.backoff_max = float(backoff_max)
         self.log = logger or logging.getLogger('saras_arm_client')
         # built-in reconnection is disabled: one supervisor thread owns (re)connection.
+        session = None
+        if tls_ca_file:
+            session = requests.Session()
+            session.verify = tls_ca_file         # engine.io uses it for the wss handshake too
         self.sio = _SocketIOClient(reconnection=False, logger=False, engineio_logger=False,
-                                   handle_sigint=False)
+                                   handle_sigint=False, http_session=session)
         self.connected = False
         self.connections = 0
         self.states = 0                # states handed to on_state
@@ -235,7 +249,8 @@ class SarasArmClient(object):
         while not self._stop.is_set():
             try:
                 self._lost.clear()
-                self.sio.connect(self.url, transports=['websocket'], wait_timeout=2)
+                self.sio.connect(self.url, transports=['websocket'], wait_timeout=2,
+                                 auth=auth.make_auth(self.key, self.arm, self.role))
                 skip_utf8_validation(getattr(self.sio.eio, 'ws', None))
                 self._on_connected()
                 backoff = self.backoff_initial

@@ -57,7 +57,16 @@ RCM_VIOLATION = 'rcm_violation'      # target not reachable by pivoting through 
 WORKSPACE = 'workspace'              # pivot angles / insertion / clip beyond joint limits
 BAD_VALUE = 'bad_value'              # e.g. max velocity <= 0 or above the hardware limit
 STALE = 'stale'                      # set_target older than the server's max_target_age
-CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE)
+NOT_COMMANDER = 'not_commander'      # from a session that is not the authenticated commanding one
+RATE_LIMITED = 'rate_limited'        # the session sent more events than its rate limit
+CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE, NOT_COMMANDER, RATE_LIMITED)
+
+#: Largest Engine.IO message the server accepts [bytes] (a command is ~150 bytes).
+MAX_MESSAGE_BYTES = 4096
+#: Fields each client event may carry (anything else: bad_payload).
+FIELDS = {'set_target': {'id', 'position', 'orientation', 'time'},
+          'set_max_velocity': {'id', 'max_velocity'}, 'set_clip': {'id', 'jaw', 'roll'},
+          'hold': {'id'}, 'subscribe_state': {'window'}, 'state_ack': {'received'}}
 
 
 class ProtocolError(ValueError):
@@ -75,9 +84,17 @@ def reply(ok, code=OK, message='', cmd_id=0):
 
 def _id(payload):
     v = payload.get('id', 0)
-    if isinstance(v, bool) or not isinstance(v, int):
-        raise ProtocolError(BAD_PAYLOAD, 'id must be an integer')
+    if isinstance(v, bool) or not isinstance(v, int) or not -2 ** 63 <= v < 2 ** 63:
+        raise ProtocolError(BAD_PAYLOAD, 'id must be a 64-bit integer')
     return v
+
+
+def _known(payload, event):
+    """Refuse fields the event does not define."""
+    extra = set(payload) - FIELDS[event]
+    if extra:
+        raise ProtocolError(BAD_PAYLOAD, 'unknown field(s) %s' % ', '.join(sorted(str(k)[:32] for k in extra)))
+    return payload
 
 
 def _vector(payload, key, n, optional=False):
@@ -129,7 +146,7 @@ def target_time(payload):
 
 def parse_set_target(payload):
     """-> (id, position (3), orientation (4, normalised) or None)."""
-    p = _dict(payload)
+    p = _known(_dict(payload), EV_SET_TARGET)
     cmd_id = _id(p)
     pos = _vector(p, 'position', 3)
     _scalar(p, 'time', optional=True)          # validated here; read with target_time()
@@ -147,7 +164,7 @@ def make_set_max_velocity(cmd_id, max_velocity):
 
 
 def parse_set_max_velocity(payload):
-    p = _dict(payload)
+    p = _known(_dict(payload), EV_SET_MAX_VELOCITY)
     return _id(p), _scalar(p, 'max_velocity')
 
 
@@ -158,17 +175,17 @@ def make_set_clip(cmd_id, jaw=None, roll=None):
 
 def parse_set_clip(payload):
     """-> (id, jaw or None, roll or None)."""
-    p = _dict(payload)
+    p = _known(_dict(payload), EV_SET_CLIP)
     return _id(p), _scalar(p, 'jaw', optional=True), _scalar(p, 'roll', optional=True)
 
 
 def parse_hold(payload):
-    return _id(_dict(payload or {}))
+    return _id(_known(_dict(payload or {}), EV_HOLD))
 
 
 def _count(payload, key):
     v = _dict(payload).get(key)
-    if not isinstance(v, int) or isinstance(v, bool) or v < 0:
+    if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v < 2 ** 63:
         raise ProtocolError(BAD_PAYLOAD, '%s must be an integer >= 0, got %r' % (key, v))
     return v
 
@@ -177,14 +194,14 @@ def parse_subscribe_state(payload):
     """:return: the flow-control window [states] (0 = none: every sample is sent)."""
     if payload is None or payload == {}:
         return 0
-    if _dict(payload).get('window') is None:
+    if _known(_dict(payload), EV_SUBSCRIBE_STATE).get('window') is None:
         return 0
     return _count(payload, 'window')
 
 
 def parse_state_ack(payload):
     """:return: the number of states the client received on this connection."""
-    return _count(payload, 'received')
+    return _count(_known(_dict(payload), EV_STATE_ACK), 'received')
 
 
 def make_state(seq, t, joints, ee_position, ee_orientation, rcm_position, moving, max_velocity,

@@ -23,7 +23,12 @@ python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
   ``state_skipped``). The Engine.IO queue check alone does not bound the latency: the kernel's
   autotuned socket buffers (MBs on loopback) hold seconds of states in front of a reader that is
   slower than the stream (a starved client process), and the queue stays empty meanwhile;
-* when the client that commanded motion disconnects, the arm holds (target := current joints).
+* when the client that commanded motion disconnects, the arm holds (target := current joints);
+* security (docs/security.md): a connection is refused before any event unless its ``auth``
+  payload authenticates (:mod:`saras_drivers.saras_arm_auth`, key of the arm link); only the newest
+  authenticated ``command`` session may command (an older one is held and dropped); every session's
+  events are rate-limited; Engine.IO messages above ``MAX_MESSAGE_BYTES`` are refused; optional
+  TLS (``ssl_context``).
 """
 
 import asyncio
@@ -34,17 +39,27 @@ import time
 import socketio
 from aiohttp import web
 
+from saras_drivers import saras_arm_auth as auth
 from saras_drivers import saras_arm_protocol as proto
 from saras_simulation.saras_arm_model import matrix_to_quat
 
 
 class SarasArmServer(object):
     """:param model: :class:`SarasArmModel`; :param rate: integration rate [Hz];
-    :param state_rate: state stream rate [Hz] (rate must be a multiple)."""
+    :param state_rate: state stream rate [Hz] (rate must be a multiple);
+    :param key: the arm link's key (bytes); :param arm: this arm's name in the auth payload;
+    :param event_rate, event_burst: per-session event rate limit [events/s], burst;
+    :param ssl_context: serve wss/https with it (None: plain)."""
 
     def __init__(self, model, host='127.0.0.1', port=5000, rate=1000.0, state_rate=250.0,
                  logger=None, ping_interval=1.0, ping_timeout=5.0, max_backlog=32,
-                 max_catch_up=30, max_target_age=0.0):
+                 max_catch_up=30, max_target_age=0.0, key=None, arm='mesa_left', max_skew=30.0,
+                 event_rate=1000.0, event_burst=200, ssl_context=None):
+        if key is None:
+            raise ValueError('the arm link needs a key (saras_drivers.keys)')
+        self.gate = auth.SessionGate(auth.Authenticator(key, arm, max_skew), event_rate, event_burst)
+        self.ssl_context = ssl_context
+        self._refusal_logged = {}    # reason -> time of the last log line
         if not rate >= 500.0:
             raise ValueError('rate must be >= 500 Hz, got %r' % rate)
         if not 0.0 < state_rate <= rate:
@@ -67,7 +82,8 @@ class SarasArmServer(object):
         # Engine.IO heartbeat: a client that does not answer a ping (sent every ping_interval [s])
         # within ping_timeout [s] is dropped; a client sees a dead server after the same sum.
         self.sio = socketio.AsyncServer(async_mode='aiohttp', logger=False, engineio_logger=False,
-                                        ping_interval=ping_interval, ping_timeout=ping_timeout)
+                                        ping_interval=ping_interval, ping_timeout=ping_timeout,
+                                        max_http_buffer_size=proto.MAX_MESSAGE_BYTES)
         self.app = web.Application()
         self.sio.attach(self.app)
         self.commander = None
@@ -101,13 +117,28 @@ class SarasArmServer(object):
         sio = self.sio
 
         @sio.event
-        async def connect(sid, environ):
+        async def connect(sid, environ, auth_payload=None):
+            try:
+                old = self.gate.connect(sid, auth_payload)
+            except auth.AuthError as e:
+                self._refused(sid, e)
+                raise socketio.exceptions.ConnectionRefusedError('unauthorized')
             self.clients += 1
             self.sids.add(sid)
-            self.log.info('client %s connected', sid)
+            self.log.info('client %s connected (%s)', sid, self.gate.roles[sid])
+            if old is not None:
+                # a newer authenticated command session: the old one may not command any more
+                now = await self._sample_until()
+                self.advance(now)
+                self.model.hold()
+                self.log.warning('command session %s superseded by %s: holding, dropping it', old, sid)
+                asyncio.ensure_future(self.sio.disconnect(old))
 
         @sio.event
         async def disconnect(sid):
+            self.gate.disconnect(sid)
+            if sid not in self.sids:
+                return
             self.clients -= 1
             self.sids.discard(sid)
             self.subscribers.discard(sid)
@@ -122,6 +153,9 @@ class SarasArmServer(object):
         async def run(sid, event, payload, fn):
             cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
             cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
+            refusal = self.gate.admit(sid, True)
+            if refusal is not None:     # rate limit, or not the commanding session: no motion, no work
+                return proto.reply(False, refusal, 'refused', 0)
             # first the state samples a late loop still owes (so they are not overtaken by the
             # command), then the command acts now: no await between advance() and fn()
             if fn is set_target and stale(payload):
@@ -190,6 +224,9 @@ class SarasArmServer(object):
 
         @sio.on(proto.EV_SUBSCRIBE_STATE)
         async def subscribe_state(sid, payload=None):
+            refusal = self.gate.admit(sid, False)
+            if refusal is not None:
+                return proto.reply(False, refusal, 'refused')
             try:
                 window = proto.parse_subscribe_state(payload)
             except proto.ProtocolError as e:
@@ -208,6 +245,8 @@ class SarasArmServer(object):
         @sio.on(proto.EV_STATE_ACK)
         async def state_ack(sid, payload=None):
             # no answer (sent ~30 times/s); a malformed one is counted and ignored
+            if self.gate.admit(sid, False) is not None:
+                return
             try:
                 received = proto.parse_state_ack(payload)
             except proto.ProtocolError:
@@ -216,6 +255,20 @@ class SarasArmServer(object):
             flow = self._flow.get(sid)
             if flow is not None:
                 flow[2] = max(flow[2], received)
+
+    def _refused(self, sid, error):
+        """Log a refused connection (one line per reason per second) and close its transport."""
+        now = time.monotonic()
+        if now - self._refusal_logged.get(error.reason, -1e9) >= 1.0:
+            self._refusal_logged[error.reason] = now
+            self.log.error('connection refused: %s (%d refused for this reason so far)', error,
+                           self.gate.refused[error.reason])
+        try:
+            eio_sid = self.sio.manager.eio_sid_from_sid(sid, proto.NAMESPACE)
+        except Exception:  # pylint: disable=broad-except
+            return
+        # after the CONNECT_ERROR went out: an unauthenticated transport gets nothing more
+        asyncio.get_event_loop().call_later(0.05, lambda: asyncio.ensure_future(self.sio.eio.disconnect(eio_sid)))
 
     def info(self):
         m = self.model
@@ -303,7 +356,7 @@ class SarasArmServer(object):
         self._emit_lock = asyncio.Lock()
         runner = web.AppRunner(self.app)
         await runner.setup()
-        site = web.TCPSite(runner, self.host, self.port)
+        site = web.TCPSite(runner, self.host, self.port, ssl_context=self.ssl_context)
         await site.start()
         self.log.info('SARAS arm server on %s:%d', self.host, self.port)
         self.ready.set()

@@ -12,8 +12,10 @@ import rostest
 from geometry_msgs.msg import PoseStamped
 
 from saras_drivers import saras_arm_kinematics as sak
+from saras_drivers import keys
 from saras_simulation.saras_arm_model import SarasArmModel
 from saras_simulation.saras_arm_server import SarasArmServer
+
 
 import diag_status
 
@@ -32,7 +34,7 @@ def wait(pred, timeout):
 class TestReconnect(unittest.TestCase):
     def make_server(self):
         model = SarasArmModel(sak.load('left'), max_velocity=0.2)
-        server = SarasArmServer(model, '127.0.0.1', rospy.get_param('~port'), 600.0, 100.0)
+        server = SarasArmServer(model, '127.0.0.1', rospy.get_param('~port'), 600.0, 100.0, key=keys.read_key_file(rospy.get_param('~key_file')))
         server.start_in_thread()
         return model, server
 
