@@ -23,6 +23,14 @@ REPORT="$OUT/report"
 mkdir -p "$REPORT"
 rm -f "$OUT"/platform.bag "$OUT"/platform.bag.active "$REPORT"/*.png
 export ROS_HOME="$OUT/ros_home"; export ROS_LOG_DIR="$ROS_HOME/log"; mkdir -p "$ROS_LOG_DIR"
+# Throw-away keys of the authenticated console and arm links for this run only (docs/security.md):
+# mode 0600 in a 0700 directory, read by the launch files through SARAS_KEY_DIR, deleted at exit.
+export SARAS_KEY_DIR="$OUT/keys"
+rm -rf "$SARAS_KEY_DIR"
+(umask 077 && mkdir -p "$SARAS_KEY_DIR") || exit 2
+for key in console saras_arm; do
+  python3 -m saras_drivers.keys "$SARAS_KEY_DIR/$key.key" || { echo "demo: cannot create $SARAS_KEY_DIR/$key.key"; exit 2; }
+done
 port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
 export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_HOSTNAME=127.0.0.1
 
@@ -31,6 +39,7 @@ cleanup() {
   for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null; done
   sleep 1
   for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
+  rm -rf "$SARAS_KEY_DIR"
 }
 trap cleanup EXIT
 # stop_pid PID NAME [FILE]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and

@@ -8,7 +8,8 @@
 // Modes:
 //   tf              the probe publishes the master TF touch_left/base -> touch_left/stylus itself
 //                   (stamp = send time): the teleop chain alone.
-//   udp:PORT:CPORT  the probe sends real Touchball state packets (protocol v1, saras_drivers
+//   udp:PORT:CPORT  the probe sends real Touchball state packets (protocol v2, authenticated with the
+//                   key $SARAS_KEY_DIR/console.key after the session handshake, saras_drivers
 //                   docs/touchball_protocol.md) to the touchball_receiver on 127.0.0.1:PORT and drains
 //                   its force commands on CPORT: the whole console-to-set-point path.
 // Also publishes the static frames and a fake arm (/mesa_left/ee_pose = last target at 250 Hz), reports
@@ -24,14 +25,21 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cctype>
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -87,24 +95,34 @@ void record(const std::string& key, const M& m)
   a.by_stamp.emplace(m.header.stamp.toNSec(), now);
 }
 
-// ---- Touchball protocol v1 state packet (saras_drivers/touchball_protocol.py), little-endian
-uint32_t crc32(const uint8_t* d, std::size_t n)
+// ---- Touchball protocol v2 (saras_drivers docs/touchball_protocol.md), little-endian
+/// The key of $SARAS_KEY_DIR/console.key (64..128 hex digits; '#' lines ignored); empty if unreadable.
+std::vector<uint8_t> readKey()
 {
-  static std::array<uint32_t, 256> table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t i = 0; i < 256; ++i)
-    {
-      uint32_t c = i;
-      for (int k = 0; k < 8; ++k)
-        c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  uint32_t c = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < n; ++i)
-    c = table[(c ^ d[i]) & 0xFFu] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
+  const char* dir = std::getenv("SARAS_KEY_DIR");
+  std::ifstream f(std::string(dir ? dir : "/etc/saras") + "/console.key");
+  std::string line;
+  std::vector<uint8_t> key;
+  while (std::getline(f, line))
+  {
+    if (line.empty() || line[0] == '#')
+      continue;
+    for (std::size_t i = 0; i + 1 < line.size() && std::isxdigit(static_cast<unsigned char>(line[i])); i += 2)
+      key.push_back(static_cast<uint8_t>(std::stoul(line.substr(i, 2), nullptr, 16)));
+    break;
+  }
+  return key;
+}
+
+std::vector<uint8_t> g_key;      ///< console link key
+uint64_t g_session = 0;          ///< session nonce from the receiver's challenge
+
+void sign(std::vector<uint8_t>& b)
+{
+  uint8_t mac[32];
+  unsigned int len = 0;
+  HMAC(EVP_sha256(), g_key.data(), static_cast<int>(g_key.size()), b.data(), b.size(), mac, &len);
+  b.insert(b.end(), mac, mac + 16);
 }
 
 template <class T>
@@ -114,17 +132,49 @@ void put(std::vector<uint8_t>& b, T v)  // x86/ARM little-endian hosts
   b.insert(b.end(), p, p + sizeof(T));
 }
 
-/// 160-byte STATE packet: header '<4sBBHId', two devices '<3d4ddI' (left, right), crc32 '<I'.
-std::vector<uint8_t> statePacket(uint32_t seq, double sender_time, const double left_xyz[3], const double right_xyz[3])
+/// Header '<4sBBHIdQ' of a v2 packet of @p type.
+std::vector<uint8_t> header(uint8_t type, uint32_t seq, double sender_time, uint64_t session)
 {
   std::vector<uint8_t> b;
-  b.reserve(160);
+  b.reserve(180);
   b.insert(b.end(), { 'T', 'B', 'A', 'L' });
-  put<uint8_t>(b, 1);   // version
-  put<uint8_t>(b, 1);   // type STATE
+  put<uint8_t>(b, 2);   // version
+  put<uint8_t>(b, type);
   put<uint16_t>(b, 0);  // flags
   put<uint32_t>(b, seq);
   put<double>(b, sender_time);
+  put<uint64_t>(b, session);
+  return b;
+}
+
+/// Send hellos until the receiver's challenge (type 4, echoing @p nonce) gives the session.
+bool handshake(int sock, int cmd_sock, const sockaddr_in& dst)
+{
+  std::mt19937_64 rng(std::random_device{}());
+  const uint64_t nonce = rng() | 1u;
+  timeval tv{ 0, 100000 };
+  setsockopt(cmd_sock, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+  for (int attempt = 0; attempt < 100 && ros::ok(); ++attempt)
+  {
+    std::vector<uint8_t> hello = header(3, 0, ros::WallTime::now().toSec(), nonce);
+    sign(hello);
+    (void)sendto(sock, hello.data(), hello.size(), 0, reinterpret_cast<const sockaddr*>(&dst), sizeof(dst));
+    uint8_t buf[2048];
+    const ssize_t n = recv(cmd_sock, buf, sizeof(buf), 0);
+    uint64_t echo = 0;
+    if (n == 52 && buf[5] == 4 && (std::memcpy(&echo, buf + 28, 8), echo == nonce))
+    {
+      std::memcpy(&g_session, buf + 20, 8);
+      return true;
+    }
+  }
+  return false;
+}
+
+/// 180-byte STATE packet: header, two devices '<3d4ddI' (left, right), 16-byte HMAC-SHA256 tag.
+std::vector<uint8_t> statePacket(uint32_t seq, double sender_time, const double left_xyz[3], const double right_xyz[3])
+{
+  std::vector<uint8_t> b = header(1, seq, sender_time, g_session);
   for (const double* p : { left_xyz, right_xyz })
   {
     for (int i = 0; i < 3; ++i)
@@ -134,7 +184,7 @@ std::vector<uint8_t> statePacket(uint32_t seq, double sender_time, const double 
     put<double>(b, 0.0);    // clip angle
     put<uint32_t>(b, 0u);   // buttons: no clutch
   }
-  put<uint32_t>(b, crc32(b.data(), b.size()));
+  sign(b);
   return b;
 }
 
@@ -340,6 +390,13 @@ int main(int argc, char** argv)
     if (sock < 0 || cmd_sock < 0 || bind(cmd_sock, reinterpret_cast<sockaddr*>(&c), sizeof(c)) != 0)
     {
       std::perror("teleop_latency_probe: udp sockets");
+      return 2;
+    }
+    g_key = readKey();
+    if (g_key.size() < 32 || !handshake(sock, cmd_sock, dst))
+    {
+      std::fprintf(stderr, "teleop_latency_probe: no console session (key $SARAS_KEY_DIR/console.key, %zu bytes)\n",
+                   g_key.size());
       return 2;
     }
   }
