@@ -115,16 +115,21 @@ class SessionGate(object):
     * :meth:`connect` authenticates a session (:class:`Authenticator`); refused => counted per reason;
     * the newest authenticated ``command`` session is the only one whose commands may move the arm;
       an older one is stale (:meth:`connect` returns it so the server holds and drops it);
-    * :meth:`admit` rate-limits the events of every session (:class:`TokenBucket`), counted.
+    * :meth:`admit` rate-limits the events of every session (:class:`TokenBucket`), counted; a
+      session with ``flood_limit`` events refused by the rate limit within one second is a flood: :meth:`admit` returns 'flood' and
+      the server drops it (each refused event still costs the server its decoding).
     """
 
-    def __init__(self, authenticator, event_rate=1000.0, event_burst=200):
+    def __init__(self, authenticator, event_rate=1000.0, event_burst=200, flood_limit=500):
         self.auth = authenticator
         self.event_rate, self.event_burst = float(event_rate), int(event_burst)
         TokenBucket(self.event_rate, self.event_burst)             # validates
         self.roles = {}                  # sid -> role
         self._buckets = {}
+        self.flood_limit = int(flood_limit)
+        self._over = {}                  # sid -> [window start, events refused by the rate limit in it]
         self.command_sid = None
+        self.floods = 0                  # sessions dropped for flooding
         self.refused = dict((r, 0) for r in AUTH_REASONS)          # connections refused per reason
         self.rate_limited = 0            # events dropped by the rate limit
         self.not_commander = 0           # commands from a session that may not command
@@ -151,6 +156,7 @@ class SessionGate(object):
     def disconnect(self, sid):
         self.roles.pop(sid, None)
         self._buckets.pop(sid, None)
+        self._over.pop(sid, None)
         if sid == self.command_sid:
             self.command_sid = None
 
@@ -160,8 +166,16 @@ class SessionGate(object):
         if bucket is None:
             self.not_commander += 1
             return 'not_commander'
+        now = time.monotonic() if now is None else now
         if not bucket.allow(now):
             self.rate_limited += 1
+            window = self._over.setdefault(sid, [now, 0])
+            if now - window[0] > 1.0:
+                window[:] = [now, 0]
+            window[1] += 1
+            if window[1] == self.flood_limit:
+                self.floods += 1
+                return 'flood'
             return 'rate_limited'
         if commanding and sid != self.command_sid:
             self.not_commander += 1
@@ -172,5 +186,6 @@ class SessionGate(object):
         """Key/values for /diagnostics."""
         d = dict(('refused %s' % r, n) for r, n in self.refused.items())
         d.update({'events rate-limited': self.rate_limited, 'commands not from the commander': self.not_commander,
-                  'command sessions superseded': self.superseded, 'sessions': len(self.roles)})
+                  'command sessions superseded': self.superseded, 'sessions': len(self.roles),
+                  'sessions dropped (flood)': self.floods})
         return d

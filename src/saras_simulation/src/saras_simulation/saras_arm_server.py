@@ -153,7 +153,7 @@ class SarasArmServer(object):
         async def run(sid, event, payload, fn):
             cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
             cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
-            refusal = self.gate.admit(sid, True)
+            refusal = self._admit(sid, True)
             if refusal is not None:     # rate limit, or not the commanding session: no motion, no work
                 return proto.reply(False, refusal, 'refused', 0)
             # first the state samples a late loop still owes (so they are not overtaken by the
@@ -224,7 +224,7 @@ class SarasArmServer(object):
 
         @sio.on(proto.EV_SUBSCRIBE_STATE)
         async def subscribe_state(sid, payload=None):
-            refusal = self.gate.admit(sid, False)
+            refusal = self._admit(sid, False)
             if refusal is not None:
                 return proto.reply(False, refusal, 'refused')
             try:
@@ -245,7 +245,7 @@ class SarasArmServer(object):
         @sio.on(proto.EV_STATE_ACK)
         async def state_ack(sid, payload=None):
             # no answer (sent ~30 times/s); a malformed one is counted and ignored
-            if self.gate.admit(sid, False) is not None:
+            if self._admit(sid, False) is not None:
                 return
             try:
                 received = proto.parse_state_ack(payload)
@@ -255,6 +255,16 @@ class SarasArmServer(object):
             flow = self._flow.get(sid)
             if flow is not None:
                 flow[2] = max(flow[2], received)
+
+    def _admit(self, sid, commanding):
+        """SessionGate.admit; a flooding session is dropped (its events are refused meanwhile)."""
+        refusal = self.gate.admit(sid, commanding)
+        if refusal == 'flood':
+            self.log.error('session %s floods (%d events over its rate limit within 1 s): dropped', sid,
+                           self.gate.flood_limit)
+            asyncio.ensure_future(self.sio.disconnect(sid))
+            refusal = proto.RATE_LIMITED
+        return refusal
 
     def _refused(self, sid, error):
         """Log a refused connection (one line per reason per second) and close its transport."""
