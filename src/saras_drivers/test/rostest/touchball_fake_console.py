@@ -79,6 +79,8 @@ class FakeConsole(object):
         self.tx.bind((source, 0))
         self.rx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.rx.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        # room for seconds of commands while this (Python, GIL-bound) reader is starved on a loaded host
+        self.rx.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
         self.rx.bind(('127.0.0.1', command_port))
         self.rx.settimeout(0.05)
         self.seq = 0
