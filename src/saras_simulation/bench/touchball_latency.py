@@ -61,7 +61,8 @@ def main():
     ap.add_argument('--rate', type=float, default=1000.0)
     ap.add_argument('--subscribers', choices=('control', 'pose'), default='control')
     ap.add_argument('--realtime-priority', type=int, default=10)
-    ap.add_argument('--receiver', default='rosrun saras_drivers touchball_receiver')
+    ap.add_argument('--receiver', default='rosrun nodelet nodelet standalone saras_drivers/TouchballReceiver '
+                    '__name:=touchball_receiver')
     ap.add_argument('--console', default='rosrun saras_simulation touchball_console_sim')
     args = ap.parse_args()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % MASTER_PORT)
