@@ -116,8 +116,9 @@ TEST(Camera, RawProjectionAndRaysAreImageGeometrys)
       worst = std::max(worst, std::hypot(p.x() - ig.x, p.y() - ig.y));
     }
     EXPECT_LT(worst, 1e-9);
-    // the ray table is the inverse of the projection, and agrees with rectifyPoint +
-    // projectPixelTo3dRay (float32, OpenCV's default 5 iterations: ~1e-5 of the focal length)
+    // the ray table is the inverse of the projection (to float32), and the rays of rectifyPoint +
+    // projectPixelTo3dRay are within their own convergence of it (a float point, OpenCV's default
+    // 5 iterations: up to ~0.25 px at the corners of the strongly distorted rational camera)
     cv::Mat rx, ry;
     pixelRays(*cam, 1, rx, ry);
     ASSERT_EQ(rx.cols, 1280);
@@ -132,7 +133,7 @@ TEST(Camera, RawProjectionAndRaysAreImageGeometrys)
         worst_ig = std::max(worst_ig, cam->fx() * std::hypot(ray.x / ray.z - rx.at<float>(v, u), ray.y / ray.z - ry.at<float>(v, u)));
       }
     EXPECT_LT(worst_inverse, 2e-3);  // float32 rays
-    EXPECT_LT(worst_ig, 0.05);       // [px]
+    EXPECT_LT(worst_ig, 0.5);        // [px]
     EXPECT_GT(worst_inverse, 0.0);   // not a table of identical rays by accident
   }
 }

@@ -316,12 +316,15 @@ TEST_F(Output, OnlyWhatIsWantedStampedAndPooled)
   EXPECT_EQ(decoded.size(), cv::Size(320, 180));
   EXPECT_LT(cv::norm(decoded, direct, cv::NORM_L1) / decoded.total() / 3, 4.0);  // JPEG 85: a few grey levels
   EXPECT_EQ(out.cameraInfo(frame.stamp).header.stamp, frame.stamp);
-  // steady state: released messages are reused, nothing allocated
-  m = EyeMessages();
+  // steady state (each frame's messages held until the next is produced, as by a publisher queue
+  // of 1): after both slots have their buffers, nothing is allocated
+  for (int k = 0; k < 3; ++k)
+    m = out.produce(*scene, 1, frame, true, true, error);
   const uint64_t before = out.allocations();
   for (int k = 0; k < 5; ++k)
     m = out.produce(*scene, 1, frame, true, true, error);
   EXPECT_EQ(out.allocations(), before);
+  EXPECT_GT(before, 0u);  // the warm-up allocated: the counter counts
   EXPECT_TRUE(error.empty()) << error;
 }
 
