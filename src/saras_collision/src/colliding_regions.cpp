@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include <saras_common/params.h>
 #include <tf2_eigen/tf2_eigen.h>
 
 #include "saras_collision/vertices_file.h"
@@ -12,11 +13,6 @@ namespace saras_collision
 namespace
 {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool positiveFinite(double v)
-{
-  return std::isfinite(v) && v > 0.0;
-}
 
 geometry_msgs::Point toPoint(const Eigen::Vector3d& v)
 {
@@ -62,74 +58,66 @@ Eigen::Quaterniond boxOrientation(const Eigen::Matrix3d& axes)
 }
 }  // namespace
 
+namespace
+{
+/// The per-tool parameters under ~tool/<name>/.
+CollidingRegionsConfig::Tool loadTool(const saras_common::Params& p, const std::string& name)
+{
+  using saras_common::nonEmpty;
+  CollidingRegionsConfig::Tool t;
+  t.name = name;
+  const std::string prefix = "tool/" + name + "/";
+  for (const char* required : { "topic", "frame", "trocar_frame", "radius" })
+    if (!p.has(prefix + required))
+      p.fail(prefix + required, "(not set)", "", "set (see config/colliding_regions.yaml)");
+  t.topic = p.text(prefix + "topic", "", { nonEmpty() });  // tool-tip PoseStamped topic
+  t.frame = p.text(prefix + "frame", "", { nonEmpty() });  // frame of the pose when its header has none
+  t.trocar_frame = p.text(prefix + "trocar_frame", "", { nonEmpty() });  // TF frame at the trocar / RCM
+  t.radius = p.number(prefix + "radius", 0.0, "m", { saras_common::inRange(0.0, 0.05) });  // shaft radius
+  t.fixture_topic = p.text(prefix + "fixture_topic", "");
+  return t;
+}
+}  // namespace
+
 bool loadConfig(const ros::NodeHandle& pnh, CollidingRegionsConfig& c, std::string& error)
 {
-  auto bad = [&](const std::string& name, const std::string& why) {
-    error = "parameter ~" + name + " " + why;
-    return false;
-  };
-  pnh.param("rate", c.rate, c.rate);
-  if (!positiveFinite(c.rate) || c.rate > 10000.0)
-    return bad("rate", "must be in (0, 10000] Hz");
-  if (!pnh.getParam("vertices_file", c.vertices_file) || c.vertices_file.empty())
-    return bad("vertices_file", "is required (path of the forbidden-region vertices file)");
-  pnh.param("scaling", c.scaling, c.scaling);
-  if (!positiveFinite(c.scaling))
-    return bad("scaling", "must be a finite number > 0 (file unit -> metres)");
-  pnh.param("vertex_tolerance", c.vertex_tolerance, c.vertex_tolerance);
-  if (!std::isfinite(c.vertex_tolerance) || c.vertex_tolerance < 0.0 || c.vertex_tolerance > 0.1)
-    return bad("vertex_tolerance", "must be in [0, 0.1] (relative)");
-  pnh.param("thresholds/collision", c.collision_threshold, c.collision_threshold);
-  pnh.param("thresholds/warning", c.warning_threshold, c.warning_threshold);
-  if (!std::isfinite(c.collision_threshold) || c.collision_threshold < 0.0)
-    return bad("thresholds/collision", "must be a finite distance >= 0 m");
-  if (!std::isfinite(c.warning_threshold) || c.warning_threshold <= c.collision_threshold)
-    return bad("thresholds/warning", "must be a finite distance > thresholds/collision (m)");
-  pnh.param("tf_timeout", c.tf_timeout, c.tf_timeout);
-  if (!positiveFinite(c.tf_timeout))
-    return bad("tf_timeout", "must be > 0 s");
-  pnh.param("pose_timeout", c.pose_timeout, c.pose_timeout);
-  if (!positiveFinite(c.pose_timeout))
-    return bad("pose_timeout", "must be > 0 s");
-  pnh.param("marker_rate", c.marker_rate, c.marker_rate);
-  if (!std::isfinite(c.marker_rate) || c.marker_rate < 0.0)
-    return bad("marker_rate", "must be >= 0 Hz (0 disables the markers)");
-  pnh.param("status_rate", c.status_rate, c.status_rate);
-  if (!positiveFinite(c.status_rate))
-    return bad("status_rate", "must be > 0 Hz");
-  pnh.param<std::string>("world_frame", c.world_frame, c.world_frame);
-  pnh.param<std::string>("bones_frame", c.bones_frame, c.bones_frame);
-  if (c.world_frame.empty())
-    return bad("world_frame", "must not be empty");
-  if (c.bones_frame.empty())
-    return bad("bones_frame", "must not be empty");
-  pnh.param("fixture/enabled", c.fixture_enabled, c.fixture_enabled);
-  pnh.param("fixture/stiffness", c.fixture_stiffness, c.fixture_stiffness);
-  pnh.param("fixture/max_force", c.fixture_max_force, c.fixture_max_force);
-  if (!std::isfinite(c.fixture_stiffness) || c.fixture_stiffness < 0.0)
-    return bad("fixture/stiffness", "must be >= 0 N/m");
-  if (!std::isfinite(c.fixture_max_force) || c.fixture_max_force < 0.0)
-    return bad("fixture/max_force", "must be >= 0 N");
-
-  std::vector<std::string> names;
-  if (!pnh.getParam("tools", names) || names.empty())
-    return bad("tools", "must be a non-empty list of tool names (order of /collision/distances)");
-  c.tools.clear();
-  for (const std::string& name : names)
+  using saras_common::inRange;
+  using saras_common::nonEmpty;
+  using saras_common::nonNegative;
+  using saras_common::positive;
+  try
   {
-    CollidingRegionsConfig::Tool t;
-    t.name = name;
-    const std::string p = "tool/" + name + "/";
-    if (!pnh.getParam(p + "topic", t.topic) || t.topic.empty())
-      return bad(p + "topic", "is required (tool-tip PoseStamped topic)");
-    if (!pnh.getParam(p + "frame", t.frame) || t.frame.empty())
-      return bad(p + "frame", "is required (frame of the tool-tip pose)");
-    if (!pnh.getParam(p + "trocar_frame", t.trocar_frame) || t.trocar_frame.empty())
-      return bad(p + "trocar_frame", "is required (TF frame at the trocar / RCM)");
-    if (!pnh.getParam(p + "radius", t.radius) || !std::isfinite(t.radius) || t.radius < 0.0 || t.radius > 0.05)
-      return bad(p + "radius", "is required, in [0, 0.05] m (instrument shaft radius)");
-    pnh.param<std::string>(p + "fixture_topic", t.fixture_topic, "");
-    c.tools.push_back(t);
+    const saras_common::Params p(pnh);
+    c.rate = p.number("rate", c.rate, "Hz", { positive(), saras_common::atMost(10000.0) });
+    if (!p.has("vertices_file"))
+      p.fail("vertices_file", "(not set)", "", "the path of the forbidden-region vertices file");
+    c.vertices_file = p.text("vertices_file", "", { nonEmpty() });
+    c.scaling = p.number("scaling", c.scaling, "file unit -> m", { positive() });
+    c.vertex_tolerance = p.number("vertex_tolerance", c.vertex_tolerance, "", { inRange(0.0, 0.1) });
+    c.collision_threshold = p.number("thresholds/collision", c.collision_threshold, "m", { nonNegative() });
+    c.warning_threshold = p.number("thresholds/warning", c.warning_threshold, "m");
+    if (!(c.warning_threshold > c.collision_threshold))
+      p.fail("thresholds/warning", c.warning_threshold, "m", "> thresholds/collision");
+    c.tf_timeout = p.number("tf_timeout", c.tf_timeout, "s", { positive() });
+    c.pose_timeout = p.number("pose_timeout", c.pose_timeout, "s", { positive() });
+    c.marker_rate = p.number("marker_rate", c.marker_rate, "Hz (0: off)", { nonNegative() });
+    c.world_frame = p.text("world_frame", c.world_frame, { nonEmpty() });
+    c.bones_frame = p.text("bones_frame", c.bones_frame, { nonEmpty() });
+    c.fixture_enabled = p.flag("fixture/enabled", c.fixture_enabled);
+    c.fixture_stiffness = p.number("fixture/stiffness", c.fixture_stiffness, "N/m", { nonNegative() });
+    c.fixture_max_force = p.number("fixture/max_force", c.fixture_max_force, "N", { nonNegative() });
+    // Order of /collision/distances and /collision/report.
+    const std::vector<std::string> names = p.texts("tools", {}, { nonEmpty() });
+    if (names.empty())
+      p.fail("tools", "(empty or not set)", "", "a non-empty list of tool names");
+    c.tools.clear();
+    for (const std::string& name : names)
+      c.tools.push_back(loadTool(p, name));
+  }
+  catch (const saras_common::ParamError& e)
+  {
+    error = e.what();
+    return false;
   }
   return true;
 }
@@ -144,6 +132,7 @@ CollidingRegions::CollidingRegions(const ros::NodeHandle& nh, const CollidingReg
     return specs;
   }())
   , tools_(config.tools.size())
+  , updater_(nh)
 {
 }
 
@@ -172,7 +161,6 @@ bool CollidingRegions::start(std::string& error)
   distances_pub_ = nh_.advertise<std_msgs::Float64MultiArray>("/collision/distances", 10);
   report_pub_ = nh_.advertise<saras_msgs::CollisionReport>("/collision/report", 10);
   markers_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("/collision/markers", 2);
-  status_pub_ = nh_.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
   for (std::size_t i = 0; i < n; ++i)
   {
     tools_[i].frame = config_.tools[i].frame;
@@ -186,10 +174,14 @@ bool CollidingRegions::start(std::string& error)
       tools_[i].wrench.header.frame_id = config_.tools[i].frame;
     }
   }
+  updater_.setHardwareID("collision");
+  min_rate_ = max_rate_ = config_.rate;
+  cycle_rate_.reset(new diagnostic_updater::FrequencyStatus(
+      diagnostic_updater::FrequencyStatusParam(&min_rate_, &max_rate_, 0.1, 5), "cycle rate"));
+  updater_.add(*cycle_rate_);
+  updater_.add("inputs", this, &CollidingRegions::inputsDiagnostic);
   start_time_ = ros::WallTime::now();
   cycle_timer_ = nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.rate), &CollidingRegions::cycle, this);
-  status_timer_ =
-      nh_.createSteadyTimer(ros::WallDuration(1.0 / config_.status_rate), &CollidingRegions::statusTimer, this);
   return true;
 }
 
@@ -264,6 +256,7 @@ void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
 {
   const ros::Time now = ros::Time::now();
   ++cycles_;
+  cycle_rate_->tick();
   updateBones();
   const std::size_t n = tools_.size();
   for (std::size_t i = 0; i < n; ++i)
@@ -321,22 +314,26 @@ void CollidingRegions::cycle(const ros::SteadyTimerEvent&)
     last_marker_time_ = wall;
     publishMarkers(now);
   }
-  if (computeLevel(nullptr) != last_level_)  // no allocation on the cycle path
-    publishStatus(now);
+  // Published at ~diagnostic_period (1 s), and at once when the level changes.
+  const uint8_t level = computeLevel(nullptr);  // no allocation on the cycle path
+  if (level != last_level_)
+  {
+    last_level_ = level;
+    updater_.force_update();
+  }
+  else
+  {
+    updater_.update();
+  }
 }
 
-void CollidingRegions::publishMarkers(const ros::Time& now)
+std::size_t CollidingRegions::fillBoxMarkers(const ros::Time& now)
 {
-  if (markers_pub_.getNumSubscribers() == 0)
-    return;
   const std::vector<OrientedBox>& boxes = scene_.boxes();
-  const std::size_t n = tools_.size();
   std::vector<visualization_msgs::Marker>& m = markers_msg_.markers;
-  m.resize(boxes.size() + 2 * n + 1);
-  std::size_t k = 0;
-  for (std::size_t b = 0; b < boxes.size(); ++b, ++k)
+  for (std::size_t b = 0; b < boxes.size(); ++b)
   {
-    visualization_msgs::Marker& mk = m[k];
+    visualization_msgs::Marker& mk = m[b];
     mk.header.frame_id = config_.world_frame;
     mk.header.stamp = now;
     mk.ns = "bones";
@@ -354,6 +351,17 @@ void CollidingRegions::publishMarkers(const ros::Time& now)
     mk.scale.z = 2 * boxes[b].half.z();
     mk.color = color(0.93f, 0.9f, 0.8f, 0.6f);
   }
+  return boxes.size();
+}
+
+void CollidingRegions::publishMarkers(const ros::Time& now)
+{
+  if (markers_pub_.getNumSubscribers() == 0)
+    return;
+  const std::size_t n = tools_.size();
+  std::vector<visualization_msgs::Marker>& m = markers_msg_.markers;
+  m.resize(scene_.boxes().size() + 2 * n + 1);
+  const std::size_t k = fillBoxMarkers(now);
   const std::vector<ToolProximityResult>& results = scene_.results();
   visualization_msgs::Marker& lines = m[k + 2 * n];
   lines.header.frame_id = config_.world_frame;
@@ -413,53 +421,71 @@ void CollidingRegions::publishMarkers(const ros::Time& now)
 
 uint8_t CollidingRegions::computeLevel(std::string* message) const
 {
-  if (!have_bones_)
-  {
-    if (message != nullptr)
-      *message = "no TF " + config_.world_frame + " -> " + config_.bones_frame + ": bones left out";
-    return saras_msgs::ComponentStatus::WARN;
-  }
-  bool all_valid = true;
+  using diagnostic_msgs::DiagnosticStatus;
+  std::size_t valid = 0;
   for (std::size_t i = 0; i < tools_.size(); ++i)
-    all_valid = all_valid && scene_.toolValid(i);
-  if (all_valid)
+    valid += scene_.toolValid(i) ? 1 : 0;
+  if (have_bones_ && valid == tools_.size())
   {
     if (message != nullptr)
       *message = "ok";
-    return saras_msgs::ComponentStatus::OK;
+    return DiagnosticStatus::OK;
   }
+  const bool starting = (ros::WallTime::now() - start_time_).toSec() <= config_.tf_timeout;
+  const uint8_t level = starting ? DiagnosticStatus::WARN : (valid == 0 ? DiagnosticStatus::STALE : DiagnosticStatus::ERROR);
   if (message != nullptr)
   {
     std::string missing;
     for (std::size_t i = 0; i < tools_.size(); ++i)
       if (!scene_.toolValid(i))
         missing += (missing.empty() ? "" : ", ") + config_.tools[i].name;
-    *message = "no valid pose/TF for: " + missing;
+    if (!have_bones_)
+      missing += (missing.empty() ? "" : ", ") + std::string("forbidden regions (no TF ") + config_.world_frame +
+                 " -> " + config_.bones_frame + ")";
+    *message = starting ? "waiting for: " + missing :
+                          (valid == 0 ? "no tool has a current pose, nothing monitored; missing: " :
+                                        "collision monitoring lost for: ") +
+                              missing;
   }
-  return saras_msgs::ComponentStatus::WARN;
+  return level;
 }
 
-void CollidingRegions::publishStatus(const ros::Time& now)
+void CollidingRegions::inputsDiagnostic(diagnostic_updater::DiagnosticStatusWrapper& status)
 {
-  saras_msgs::ComponentStatus s;
-  s.header.stamp = now;
-  s.component = "colliding_regions";
-  s.level = computeLevel(&s.message);
-  last_level_ = s.level;
-  double age = 0.0;
-  for (const ToolState& t : tools_)
-    age = std::max(age, t.have_pose ? (now - t.stamp_rx).toSec() : (ros::WallTime::now() - start_time_).toSec());
-  s.input_age = age;
-  s.received = received_;
-  s.rejected = rejected_;
-  if (tf_failures_ > 0 && s.level != saras_msgs::ComponentStatus::OK)
-    s.message += " (last missing TF frame: " + missing_frame_ + ")";
-  status_pub_.publish(s);
-}
-
-void CollidingRegions::statusTimer(const ros::SteadyTimerEvent&)
-{
-  publishStatus(ros::Time::now());
+  std::string message;
+  const uint8_t level = computeLevel(&message);
+  if (tf_failures_ > 0 && level != diagnostic_msgs::DiagnosticStatus::OK)
+    message += " (last missing TF frame: " + missing_frame_ + ")";
+  status.summary(level, message);
+  const ros::Time now = ros::Time::now();
+  for (std::size_t i = 0; i < tools_.size(); ++i)
+  {
+    const ToolState& t = tools_[i];
+    const std::string key = config_.tools[i].name + " pose age [s]";
+    if (t.have_pose)
+      status.addf(key, "%.3f%s", (now - t.stamp_rx).toSec(), scene_.toolValid(i) ? "" : " (not monitored)");
+    else
+      status.add(key, "no pose received");
+  }
+  status.add("forbidden regions placed", have_bones_);
+  status.add("poses received", received_);
+  status.add("poses rejected (non-finite)", rejected_);
+  status.add("TF lookup failures", tf_failures_);
+  status.add("cycles", cycles_);
+  const std::vector<ToolProximityResult>& results = scene_.results();
+  double closest = std::numeric_limits<double>::infinity();
+  std::string closest_tool;
+  for (std::size_t i = 0; i < results.size() && i < tools_.size(); ++i)
+    if (scene_.toolValid(i) && results[i].distance < closest)
+    {
+      closest = results[i].distance;
+      closest_tool = config_.tools[i].name;
+    }
+  if (!closest_tool.empty())
+  {
+    status.addf("closest distance [m]", "%.6f", closest);
+    status.add("closest tool", closest_tool);
+  }
 }
 
 }  // namespace saras_collision

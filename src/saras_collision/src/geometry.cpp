@@ -33,7 +33,7 @@ struct BoxEdges
 };
 
 /// Edge vectors and squared lengths of 8 vertices (documented order), first part of the box test.
-SARAS_COLLISION_INLINE void boxEdges(const Eigen::Vector3d v[], BoxEdges& e)
+void boxEdges(const Eigen::Vector3d v[], BoxEdges& e)
 {
   const Eigen::Vector3d& v0 = v[0];
   e.ex = v[1] - v0;
@@ -44,8 +44,8 @@ SARAS_COLLISION_INLINE void boxEdges(const Eigen::Vector3d v[], BoxEdges& e)
   e.lz2 = e.ez.squaredNorm();
 }
 
-/// The combined test of validateBox() on edges from boxEdges(): true for a box within rt.
-SARAS_COLLISION_INLINE bool boxShapePasses(const Eigen::Vector3d v[], const BoxEdges& e, double rt2)
+/// The combined shape test of validateBox() on edges from boxEdges(): true for a box within rt.
+bool boxShapePasses(const Eigen::Vector3d v[], const BoxEdges& e, double rt2)
 {
   const double diag2 = e.lx2 + e.ly2 + e.lz2;
   const double tol2 = rt2 * diag2;
@@ -54,16 +54,8 @@ SARAS_COLLISION_INLINE bool boxShapePasses(const Eigen::Vector3d v[], const BoxE
   const Eigen::Array3d r2 = ((v[2] - v[3]) - e.ex).array(), r5 = ((v[5] - v[4]) - e.ex).array();
   const Eigen::Array3d r6 = ((v[6] - v[5]) - e.ez).array(), r7 = ((v[7] - v[4]) - e.ez).array();
   const double residual2 = ((r2 * r2 + r5 * r5) + (r6 * r6 + r7 * r7)).sum();
-  // Bitwise & on purpose: one combined test, no branch per condition.
-  return (diag2 < std::numeric_limits<double>::infinity()) & (minD(minD(e.lx2, e.ly2), e.lz2) > tol2) &
-         (cos2 <= rt2 * (e.lx2 * e.ly2 * e.lz2)) & (residual2 <= tol2);
-}
-
-/// boxEdges() then boxShapePasses().
-SARAS_COLLISION_INLINE bool boxTestPasses(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
-{
-  boxEdges(v, e);
-  return boxShapePasses(v, e, rt2);
+  return diag2 < std::numeric_limits<double>::infinity() && std::min({ e.lx2, e.ly2, e.lz2 }) > tol2 &&
+         cos2 <= rt2 * (e.lx2 * e.ly2 * e.lz2) && residual2 <= tol2;
 }
 
 /**
@@ -75,15 +67,15 @@ SARAS_COLLISION_INLINE bool boxTestPasses(const Eigen::Vector3d v[], double rt2,
  *  - order: the 4 residuals v2 - v3 - e_x, v5 - v4 - e_x, v6 - v5 - e_z, v7 - v4 - e_z (zero
  *    for a box: each is one parallel edge minus another) have a sum of squared norms
  *    <= rt^2 |diag|^2. Every vertex enters one of them.
- * Branch-free: one combined test, each written to be false on NaN, so non-finite vertices fail
- * it (an infinite edge fails the first test, then every residual with a non-finite vertex is
- * NaN or infinite); only then are the vertices scanned to tell kInvalidInput from kInvalidBox.
- * Split into boxEdges() and boxShapePasses() so that a caller can interleave its own work.
+ * Each test is written to be false on NaN, so non-finite vertices fail them (an infinite edge
+ * fails the first test, then every residual with a non-finite vertex is NaN or infinite); only
+ * then are the vertices scanned to tell kInvalidInput from kInvalidBox.
  * @return kSeparated (valid), kInvalidBox or kInvalidInput
  */
-SARAS_COLLISION_INLINE int validateBox(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
+int validateBox(const Eigen::Vector3d v[], double rt2, BoxEdges& e)
 {
-  if (boxTestPasses(v, rt2, e))
+  boxEdges(v, e);
+  if (boxShapePasses(v, e, rt2))
     return kSeparated;
   return verticesFinite(v) ? kInvalidBox : kInvalidInput;
 }
@@ -91,7 +83,7 @@ SARAS_COLLISION_INLINE int validateBox(const Eigen::Vector3d v[], double rt2, Bo
 /// Fills centre, axes and half extents of @p box from validated vertices (not the bounding
 /// radius). Gram-Schmidt keeps x exact; the residual non-orthogonality is within the
 /// tolerance. The handedness of the vertex order is kept.
-SARAS_COLLISION_INLINE void boxFrame(const Eigen::Vector3d v[], const BoxEdges& e, OrientedBox& box)
+void boxFrame(const Eigen::Vector3d v[], const BoxEdges& e, OrientedBox& box)
 {
   const double lx = std::sqrt(e.lx2), ly = std::sqrt(e.ly2), lz = std::sqrt(e.lz2);
   const Eigen::Vector3d x = e.ex * (1.0 / lx);
@@ -217,36 +209,34 @@ void boxVertices(const OrientedBox& box, Eigen::Vector3d vertices[])
 // crossing of two of its 6 linear pieces (kinks of |.| included).
 namespace
 {
-/// capsuleBox() without the input checks (inputs finite, r >= 0).
-DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
-                                 const OrientedBox& box)
+/// The result for the closest axis point @p axis_point (world) outside the box: @p v = that point
+/// minus the closest box point, in box coordinates, |v| = @p axis > 0.
+DistanceResult outsideResult(const Eigen::Vector3d& axis_point, const Eigen::Vector3d& v, double axis, double r,
+                             const OrientedBox& box)
 {
-  const Eigen::Matrix3d& R = box.axes;
-  const Eigen::Vector3d& h = box.half;
-  const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
-  if (p1 == p2)
-  {
-    // Sphere: closest box point = clamped centre (the general path below gives the same).
-    const Eigen::Vector3d q(clampTo(a[0], h[0]), clampTo(a[1], h[1]), clampTo(a[2], h[2]));
-    const Eigen::Vector3d v = a - q;
-    const double axis2 = v.squaredNorm();
-    // Centre outside the box (inside: the general path, whose depth walk reduces to the
-    // nearest face for d = 0).
-    if (axis2 > 0.0)
-    {
-      const double axis = std::sqrt(axis2);
-      DistanceResult out;
-      out.distance = axis - r;
-      out.code = classify(out.distance);
-      const Eigen::Vector3d v_world = R * v;
-      out.normal = v_world * (1.0 / axis);
-      out.point2 = p1 - v_world;
-      out.point1 = p1 - (surfaceFactor(out.distance) * r) * out.normal;
-      return out;
-    }
-  }
-  const Eigen::Vector3d d = R.transpose() * (p2 - p1);  // exactly zero for a sphere
+  DistanceResult out;
+  out.distance = axis - r;
+  out.code = classify(out.distance);
+  const Eigen::Vector3d v_world = box.axes * v;  // axis point - box point, world
+  out.normal = v_world / axis;
+  out.point2 = axis_point - v_world;
+  out.point1 = axis_point - (surfaceFactor(out.distance) * r) * out.normal;
+  return out;
+}
 
+/// x clamped to the box [-h, h] (box coordinates).
+Eigen::Vector3d clampToBox(const Eigen::Vector3d& x, const Eigen::Vector3d& h)
+{
+  return Eigen::Vector3d(clampTo(x[0], h[0]), clampTo(x[1], h[1]), clampTo(x[2], h[2]));
+}
+
+/**
+ * The minimiser t in [0, 1] of F(t) (see above) for the axis x(t) = a + t d in box coordinates:
+ * the zero of F'(t), found by walking its (at most 6) sorted breakpoints and interpolating
+ * linearly inside the piece where F' changes sign.
+ */
+double closestAxisParameter(const Eigen::Vector3d& a, const Eigen::Vector3d& d, const Eigen::Vector3d& h)
+{
   auto slope = [&](double t) {
     double g = 0.0;
     for (int i = 0; i < 3; ++i)
@@ -256,114 +246,113 @@ DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3
     }
     return g;
   };
-
-  double t = 0.0;
   const double g0 = d.isZero(0.0) ? 0.0 : slope(0.0);  // sphere: t = 0
-  if (g0 < 0.0)
+  if (!(g0 < 0.0))
+    return 0.0;
+  const double g1 = slope(1.0);
+  if (g1 <= 0.0)
+    return 1.0;
+  double bp[7];
+  int n = 0;
+  for (int i = 0; i < 3; ++i)
   {
-    const double g1 = slope(1.0);
-    if (g1 <= 0.0)
-    {
-      t = 1.0;
-    }
-    else
-    {
-      double bp[7];
-      int n = 0;
-      for (int i = 0; i < 3; ++i)
-      {
-        if (d[i] == 0.0)
-          continue;
-        const double ta = (-h[i] - a[i]) / d[i];
-        const double tb = (h[i] - a[i]) / d[i];
-        if (ta > 0.0 && ta < 1.0)
-          bp[n++] = ta;
-        if (tb > 0.0 && tb < 1.0)
-          bp[n++] = tb;
-      }
-      for (int i = 1; i < n; ++i)  // insertion sort of <= 6 values
-      {
-        const double key = bp[i];
-        int j = i - 1;
-        for (; j >= 0 && bp[j] > key; --j)
-          bp[j + 1] = bp[j];
-        bp[j + 1] = key;
-      }
-      bp[n++] = 1.0;
-      double t_prev = 0.0, g_prev = g0;
-      t = 1.0;
-      for (int k = 0; k < n; ++k)
-      {
-        const double g = k + 1 == n ? g1 : slope(bp[k]);
-        if (g >= 0.0)
-        {
-          t = t_prev + (-g_prev) * (bp[k] - t_prev) / (g - g_prev);
-          t = std::min(std::max(t, t_prev), bp[k]);
-          break;
-        }
-        t_prev = bp[k];
-        g_prev = g;
-      }
-    }
+    if (d[i] == 0.0)
+      continue;
+    const double ta = (-h[i] - a[i]) / d[i];
+    const double tb = (h[i] - a[i]) / d[i];
+    if (ta > 0.0 && ta < 1.0)
+      bp[n++] = ta;
+    if (tb > 0.0 && tb < 1.0)
+      bp[n++] = tb;
   }
-
-  DistanceResult out;
-  Eigen::Vector3d x = a + t * d;
-  Eigen::Vector3d q(clampTo(x[0], h[0]), clampTo(x[1], h[1]), clampTo(x[2], h[2]));
-  const Eigen::Vector3d v = x - q;
-  const double axis = v.norm();
-  // Entering the box leaves x(t*) on its boundary up to rounding: below the tangent tolerance
-  // the depth computation below decides (it returns >= 0 only if the axis merely touches).
-  if (axis > kTangentTolerance || (axis > 0.0 && minimumDepth(a, d, h, t) >= 0.0))
+  for (int i = 1; i < n; ++i)  // insertion sort of <= 6 values
   {
-    out.distance = axis - r;
-    out.code = classify(out.distance);
-    const Eigen::Vector3d v_world = R * v;  // axis point - box point, world
-    out.normal = v_world * (1.0 / axis);
-    const Eigen::Vector3d axis_point = p1 + t * (p2 - p1);
-    out.point2 = axis_point - v_world;
-    out.point1 = axis_point - (surfaceFactor(out.distance) * r) * out.normal;
-    return out;
+    const double key = bp[i];
+    int j = i - 1;
+    for (; j >= 0 && bp[j] > key; --j)
+      bp[j + 1] = bp[j];
+    bp[j + 1] = key;
   }
+  bp[n++] = 1.0;
+  double t_prev = 0.0, g_prev = g0;
+  for (int k = 0; k < n; ++k)
+  {
+    const double g = k + 1 == n ? g1 : slope(bp[k]);
+    if (g >= 0.0)
+    {
+      const double t = t_prev + (-g_prev) * (bp[k] - t_prev) / (g - g_prev);
+      return std::min(std::max(t, t_prev), bp[k]);
+    }
+    t_prev = bp[k];
+    g_prev = g;
+  }
+  return 1.0;
+}
 
-  // The axis reaches the box.
-  double best_t = t;
-  const double best = minimumDepth(a, d, h, t, &best_t);
-  x = a + best_t * d;
+/**
+ * The axis reaches the box: the deepest axis point (minimum of G from minimumDepth(), @p t_hint
+ * an extra candidate) and, when intersecting, its projection on the nearest face.
+ */
+DistanceResult reachingResult(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
+                              const OrientedBox& box, const Eigen::Vector3d& a, const Eigen::Vector3d& d,
+                              double t_hint)
+{
+  const Eigen::Vector3d& h = box.half;
+  double best_t = t_hint;
+  const double best = minimumDepth(a, d, h, t_hint, &best_t);
+  const Eigen::Vector3d x = a + best_t * d;
   const Eigen::Vector3d axis_point = p1 + best_t * (p2 - p1);
+  DistanceResult out;
   out.distance = std::min(best, 0.0) - r;
   out.code = classify(out.distance);
   int face = 0;
-  double face_g = std::abs(x[0]) - h[0];
-  for (int i = 1; i < 3; ++i)
-  {
-    const double g = std::abs(x[i]) - h[i];
-    if (g > face_g)
-    {
-      face_g = g;
-      face = i;
-    }
-  }
+  (x.cwiseAbs() - h).maxCoeff(&face);  // nearest face: largest |x_i| - h_i
   const double sign = x[face] < 0.0 ? -1.0 : 1.0;
-  out.normal = R.col(face) * sign;
+  out.normal = box.axes.col(face) * sign;
+  out.point1 = axis_point;
   if (out.code == kIntersecting)
   {
     Eigen::Vector3d on_face = x;
     on_face[face] = sign * h[face];
-    out.point1 = axis_point;
-    out.point2 = box.center + R * on_face;
+    out.point2 = box.center + box.axes * on_face;
   }
   else
   {
-    out.point1 = axis_point;  // tangent: zero radius axis touching the box
-    out.point2 = axis_point;
+    out.point2 = axis_point;  // tangent: zero radius axis touching the box
   }
   return out;
 }
 
+/// capsuleBox() without the input checks (inputs finite, r >= 0).
+DistanceResult capsuleBoxChecked(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r,
+                                 const OrientedBox& box)
+{
+  const Eigen::Matrix3d& R = box.axes;
+  const Eigen::Vector3d& h = box.half;
+  const Eigen::Vector3d a = R.transpose() * (p1 - box.center);
+  if (p1 == p2)
+  {
+    // Sphere with its centre outside the box: closest box point = clamped centre (inside: the
+    // general path, whose depth walk reduces to the nearest face for d = 0).
+    const Eigen::Vector3d v = a - clampToBox(a, h);
+    const double axis2 = v.squaredNorm();
+    if (axis2 > 0.0)
+      return outsideResult(p1, v, std::sqrt(axis2), r, box);
+  }
+  const Eigen::Vector3d d = R.transpose() * (p2 - p1);  // exactly zero for a sphere
+  const double t = closestAxisParameter(a, d, h);
+  const Eigen::Vector3d x = a + t * d;
+  const Eigen::Vector3d v = x - clampToBox(x, h);
+  const double axis = v.norm();
+  // Entering the box leaves x(t*) on its boundary up to rounding: below the tangent tolerance
+  // the depth computation decides (it returns >= 0 only if the axis merely touches).
+  if (axis > kTangentTolerance || (axis > 0.0 && minimumDepth(a, d, h, t) >= 0.0))
+    return outsideResult(p1 + t * (p2 - p1), v, axis, r, box);
+  return reachingResult(p1, p2, r, box, a, d, t);
+}
+
 }  // namespace
 
-SARAS_COLLISION_MULTIVERSION
 DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, double r, const OrientedBox& box)
 {
   if (!allFinite(p1, p2) || !validRadius(r))
@@ -372,9 +361,8 @@ DistanceResult capsuleBox(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2, 
 }
 
 
-// The box is validated (branch-free fast path) and its frame built on every call; the query is
+// The box is validated and its frame built on every call; the query is
 // then capsuleBox(). Prebuild an OrientedBox with makeBox() for repeated queries.
-SARAS_COLLISION_MULTIVERSION
 int dist_capsule_to_parallelepiped(const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                                    const Eigen::Vector3d vertices[], double r, double& distance,
                                    Eigen::Vector3d& point_on_capsule, Eigen::Vector3d& point_on_parall)
@@ -399,15 +387,9 @@ int dist_capsule_to_parallelepiped(const Eigen::Vector3d& p1, const Eigen::Vecto
 // edges are u_i / |e_i|^2 in [0, 1] inside the box; the closest box point clamps u_i to
 // [0, |e_i|^2] (Ericson 5.1.4), and s minus it is sum_i (u_i - clamp(u_i)) / |e_i|^2 e_i.
 // Only a centre inside the box needs the edge lengths (depth to the nearest face).
-namespace
-{
-/// dist_sphere_to_parallelepiped() in every case (invalid input, invalid box, centre inside or
-/// on the box), out of line: the common case below does not keep its values alive.
-#if defined(__GNUC__)
-__attribute__((noinline))
-#endif
-int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r, double& distance,
-                     Eigen::Vector3d& point_on_sphere, Eigen::Vector3d& point_on_parall)
+int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
+                                  double& distance, Eigen::Vector3d& point_on_sphere,
+                                  Eigen::Vector3d& point_on_parall)
 {
   if (vertices == nullptr || !std::isfinite(s.sum() + r) || !(r >= 0.0))
     return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
@@ -417,11 +399,10 @@ int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[],
     return invalidOutputs(valid, distance, point_on_sphere, point_on_parall);
   const Eigen::Vector3d w = s - vertices[0];
   const double ux = w.dot(e.ex), uy = w.dot(e.ey), uz = w.dot(e.ez);
-  const double cx = minD(maxD(ux, 0.0), e.lx2);
-  const double cy = minD(maxD(uy, 0.0), e.ly2);
-  const double cz = minD(maxD(uz, 0.0), e.lz2);
-  // Centre minus closest box point, world [m]. The reciprocals depend only on the edges, so
-  // they are ready before the projections (off the dependency chain).
+  const double cx = std::min(std::max(ux, 0.0), e.lx2);
+  const double cy = std::min(std::max(uy, 0.0), e.ly2);
+  const double cz = std::min(std::max(uz, 0.0), e.lz2);
+  // Centre minus closest box point, world [m].
   const double ix = 1.0 / e.lx2, iy = 1.0 / e.ly2, iz = 1.0 / e.lz2;
   const Eigen::Vector3d off = ((ux - cx) * ix) * e.ex + ((uy - cy) * iy) * e.ey + ((uz - cz) * iz) * e.ez;
   const double axis2 = off.squaredNorm();
@@ -432,7 +413,7 @@ int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[],
   {
     const double axis = std::sqrt(axis2);
     const double dist = axis - r;
-    const double scale = surfaceFactor(dist) * r * (axis * (1.0 / axis2));  // division overlaps the sqrt
+    const double scale = surfaceFactor(dist) * r / axis;
     distance = dist;
     point_on_parall = s - off;
     point_on_sphere = s - scale * off;
@@ -462,49 +443,6 @@ int sphereBoxCareful(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[],
   point_on_sphere = s;
   point_on_parall = s + ((1.0 - surfaceFactor(distance)) * depth) * normal;  // tangent: s
   return classify(distance);
-}
-
-}  // namespace
-
-// Common case (valid inputs and box, centre outside the box) with one predictable branch; the
-// box test and the projection are independent, so they overlap. Everything else is
-// sphereBoxCareful(), which recomputes from the inputs.
-SARAS_COLLISION_MULTIVERSION
-int dist_sphere_to_parallelepiped(const Eigen::Vector3d& s, const Eigen::Vector3d vertices[], double r,
-                                  double& distance, Eigen::Vector3d& point_on_sphere,
-                                  Eigen::Vector3d& point_on_parall)
-{
-  if (vertices == nullptr)
-    return invalidOutputs(kInvalidInput, distance, point_on_sphere, point_on_parall);
-  BoxEdges e;
-  boxEdges(vertices, e);
-  const Eigen::Vector3d w = s - vertices[0];
-  const double ux = w.dot(e.ex), uy = w.dot(e.ey), uz = w.dot(e.ez);
-  const double cx = minD(maxD(ux, 0.0), e.lx2);
-  const double cy = minD(maxD(uy, 0.0), e.ly2);
-  const double cz = minD(maxD(uz, 0.0), e.lz2);
-  const double ix = 1.0 / e.lx2, iy = 1.0 / e.ly2, iz = 1.0 / e.lz2;
-  const Eigen::Vector3d off = ((ux - cx) * ix) * e.ex + ((uy - cy) * iy) * e.ey + ((uz - cz) * iz) * e.ez;
-  const double axis2 = off.squaredNorm();
-  // The rest of the box test after the projection (fewer values alive at once). Each test is
-  // false on NaN. A non-finite centre coordinate s_j makes axis2 NaN: every u_i is NaN or
-  // +-inf (w.e_i with w_j infinite: inf * 0 = NaN when e_ij = 0), so is u_i - c_i (c_i is
-  // finite), and a component k != j of off sums +-inf terms of both signs (the products
-  // e_ij e_ik of orthogonal edges have both signs), inf - inf = NaN (gtest
-  // Box.FastValidationRejectsEveryBadVertexWithItsCode sets each coordinate to NaN / +-inf).
-  // axis2 < inf also sends an overflow (centre beyond ~1e154 m) to the out-of-line path.
-  const bool box_ok = boxShapePasses(vertices, e, kBoxRelativeTolerance * kBoxRelativeTolerance);
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  if (!(box_ok & (axis2 > kMinAxis2) & (axis2 < kInf) & (r >= 0.0) & (r < kInf)))
-    return sphereBoxCareful(s, vertices, r, distance, point_on_sphere, point_on_parall);
-  const double axis = std::sqrt(axis2);
-  const double dist = axis - r;
-  // r / axis = r axis / axis2 (the division overlaps the square root); 0 when intersecting.
-  const double scale = unlessIntersecting(dist, axis) * (r * (1.0 / axis2));
-  distance = dist;
-  point_on_parall = s - off;
-  point_on_sphere = s - scale * off;
-  return classify(dist);
 }
 
 }  // namespace saras_collision

@@ -60,6 +60,69 @@ bool parseDouble(const std::string& s, double& value)
   }
   return used == s.size() && std::isfinite(value);
 }
+
+/// The first line: the number of boxes NUM (integer in [0, 1000000]). @return false with @p error
+bool readBoxCount(LineReader& reader, std::vector<std::string>& tokens, long& num, std::string& error)
+{
+  if (!reader.nextLine(tokens))
+  {
+    error = "line " + std::to_string(reader.line()) + ": empty file, expected the number of boxes NUM";
+    return false;
+  }
+  std::size_t used = 0;
+  try
+  {
+    num = std::stol(tokens[0], &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (tokens.size() != 1 || used != tokens[0].size() || num < 0 || num > 1000000)
+  {
+    error = "line " + std::to_string(reader.line()) + ": expected the number of boxes NUM (integer >= 0), got '" +
+            tokens[0] + (tokens.size() > 1 ? " ..." : "") + "'";
+    return false;
+  }
+  return true;
+}
+
+/// The 8 vertex lines of box @p b (of @p num), scaled to metres into @p v; @p first_line is the
+/// line number of its first vertex. @return false with @p error
+bool readBoxVertices(LineReader& reader, std::vector<std::string>& tokens, long b, long num, double scaling,
+                     Eigen::Vector3d v[], int& first_line, std::string& error)
+{
+  for (int c = 0; c < 8; ++c)
+  {
+    if (!reader.nextLine(tokens))
+    {
+      error = "line " + std::to_string(reader.line()) + ": unexpected end of file in box " + std::to_string(b) +
+              " (vertex " + std::to_string(c) + " of 8 missing; NUM = " + std::to_string(num) + ")";
+      return false;
+    }
+    if (c == 0)
+      first_line = reader.line();
+    if (tokens.size() != 3)
+    {
+      error = "line " + std::to_string(reader.line()) + ": expected 3 coordinates 'x y z' for vertex " +
+              std::to_string(c) + " of box " + std::to_string(b) + ", got " + std::to_string(tokens.size()) +
+              " values";
+      return false;
+    }
+    for (int k = 0; k < 3; ++k)
+    {
+      double value = 0.0;
+      if (!parseDouble(tokens[k], value))
+      {
+        error = "line " + std::to_string(reader.line()) + ": '" + tokens[k] + "' is not a finite number (vertex " +
+                std::to_string(c) + " of box " + std::to_string(b) + ")";
+        return false;
+      }
+      v[c][k] = value * scaling;
+    }
+  }
+  return true;
+}
 }  // namespace
 
 bool parseVertices(std::istream& in, double scaling, double relative_tolerance, std::vector<OrientedBox>& boxes,
@@ -73,63 +136,16 @@ bool parseVertices(std::istream& in, double scaling, double relative_tolerance, 
   }
   LineReader reader(in);
   std::vector<std::string> tokens;
-  if (!reader.nextLine(tokens))
-  {
-    error = "line " + std::to_string(reader.line()) + ": empty file, expected the number of boxes NUM";
-    return false;
-  }
   long num = -1;
-  {
-    std::size_t used = 0;
-    try
-    {
-      num = std::stol(tokens[0], &used);
-    }
-    catch (const std::exception&)
-    {
-      used = 0;
-    }
-    if (tokens.size() != 1 || used != tokens[0].size() || num < 0 || num > 1000000)
-    {
-      error = "line " + std::to_string(reader.line()) + ": expected the number of boxes NUM (integer >= 0), got '" +
-              tokens[0] + (tokens.size() > 1 ? " ..." : "") + "'";
-      return false;
-    }
-  }
+  if (!readBoxCount(reader, tokens, num, error))
+    return false;
   boxes.reserve(static_cast<std::size_t>(num));
   for (long b = 0; b < num; ++b)
   {
     Eigen::Vector3d v[8];
     int first_line = 0;
-    for (int c = 0; c < 8; ++c)
-    {
-      if (!reader.nextLine(tokens))
-      {
-        error = "line " + std::to_string(reader.line()) + ": unexpected end of file in box " + std::to_string(b) +
-                " (vertex " + std::to_string(c) + " of 8 missing; NUM = " + std::to_string(num) + ")";
-        return false;
-      }
-      if (c == 0)
-        first_line = reader.line();
-      if (tokens.size() != 3)
-      {
-        error = "line " + std::to_string(reader.line()) + ": expected 3 coordinates 'x y z' for vertex " +
-                std::to_string(c) + " of box " + std::to_string(b) + ", got " + std::to_string(tokens.size()) +
-                " values";
-        return false;
-      }
-      for (int k = 0; k < 3; ++k)
-      {
-        double value = 0.0;
-        if (!parseDouble(tokens[k], value))
-        {
-          error = "line " + std::to_string(reader.line()) + ": '" + tokens[k] + "' is not a finite number (vertex " +
-                  std::to_string(c) + " of box " + std::to_string(b) + ")";
-          return false;
-        }
-        v[c][k] = value * scaling;
-      }
-    }
+    if (!readBoxVertices(reader, tokens, b, num, scaling, v, first_line, error))
+      return false;
     OrientedBox box;
     const int code = makeBox(v, relative_tolerance, box);
     if (code != kSeparated)

@@ -35,9 +35,10 @@
 #include <std_msgs/Float64MultiArray.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
-#include <saras_msgs/ComponentStatus.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <image_geometry/pinhole_camera_model.h>
 
-#include "saras_visual_feedback/image_pool.h"
+#include <saras_common/message_pool.h>
 #include "saras_visual_feedback/overlay.h"
 #include "saras_visual_feedback/pose_history.h"
 
@@ -85,14 +86,56 @@ struct Stats
   }
 };
 
+/// Projection of one tool (tip + 8 shaft segments) into the raw image: RawProjector (one
+/// cv::projectPoints call) against image_geometry's point API (project3dToPixel + unrectifyPoint,
+/// per point; valid for a monocular camera only). The overlay's hot path is 4 tools per eye.
+void runProjection()
+{
+  const CameraIntrinsics k = intrinsics(1920, 1080);
+  RawProjector raw;
+  raw.configure(k, nullptr);
+  sensor_msgs::CameraInfo info;
+  info.width = 1920;
+  info.height = 1080;
+  info.distortion_model = "plumb_bob";
+  info.D.assign(k.d.begin(), k.d.begin() + 5);
+  info.K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info.P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
+  image_geometry::PinholeCameraModel ig;
+  ig.fromCameraInfo(info);
+  cv::Point3d pts[9];
+  for (int i = 0; i < 9; ++i)
+    pts[i] = cv::Point3d(0.01 + 0.002 * i, -0.005, 0.1 + 0.005 * i);
+  Projection out[9];
+  const int n = 20000;
+  double sink = 0.0;
+  auto t0 = std::chrono::steady_clock::now();
+  for (int r = 0; r < n; ++r)
+  {
+    raw.project(pts, 9, out);
+    sink += out[8].pixel.x;
+  }
+  const double raw_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / n;
+  t0 = std::chrono::steady_clock::now();
+  for (int r = 0; r < n; ++r)
+    for (const cv::Point3d& p : pts)
+      sink += ig.unrectifyPoint(ig.project3dToPixel(p)).x;
+  const double ig_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count() / n;
+  std::printf("projection of one tool (9 points): RawProjector %.2f us, image_geometry point API %.2f us "
+              "(checksum %.0f)\n\n",
+              raw_us, ig_us, sink);
+}
+
 int runCore(int iterations)
 {
+  runProjection();
   std::printf("wall-clock times, except cpu/frame = CPU time of the thread (immune to preemption)\n");
   std::printf("%-10s %-14s %10s %10s %10s %10s\n", "image", "unit", "mean_ms", "p50_ms", "p99_ms", "max_ms");
   const int sizes[2][2] = {{1280, 720}, {1920, 1080}};
   for (const auto& sz : sizes)
   {
-    CameraModel eye[2];
+    RawProjector eye[2];
     eye[0].configure(intrinsics(sz[0], sz[1]), nullptr);
     eye[1].configure(intrinsics(sz[0], sz[1]), nullptr);
     cv::Mat input(sz[1], sz[0], CV_8UC3);
@@ -194,14 +237,18 @@ public:
     pose_pub_[0] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_left/ee_pose", 1);
     pose_pub_[1] = nh.advertise<geometry_msgs::PoseStamped>("/mesa_right/ee_pose", 1);
     dist_pub_ = nh.advertise<std_msgs::Float64MultiArray>("/collision/distances", 1);
-    status_sub_ = nh.subscribe<saras_msgs::ComponentStatus>(
-        "/saras/status", 10, [this](const saras_msgs::ComponentStatusConstPtr& m) {
-            std::lock_guard<std::mutex> lock(mutex_);
-          if (m->component == "/bench_vf")
-          {
-            status_ = m->message;
-            status_stamp_ = ros::WallTime::now();
-          }
+    status_sub_ = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 10, [this](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          for (const diagnostic_msgs::DiagnosticStatus& st : m->status)
+            if (st.name.rfind("bench_vf:", 0) == 0)
+            {
+              status_.clear();
+              for (const diagnostic_msgs::KeyValue& kv : st.values)
+                if (kv.key.find("frames in") != std::string::npos || kv.key.find("[ms]") != std::string::npos)
+                  status_ += kv.key + ": " + kv.value + "; ";
+              status_stamp_ = ros::WallTime::now();
+            }
         });
     // Tools' frames 10 cm in front of the cameras.
     std::vector<geometry_msgs::TransformStamped> tfs;
@@ -258,7 +305,7 @@ public:
     for (int e = 0; e < 2; ++e)
     {
       // Pooled input buffers: the publisher's cost is not what is measured here.
-      sensor_msgs::ImagePtr img = input_pool_[e].acquire(static_cast<std::size_t>(3 * w_) * h_);
+      sensor_msgs::ImagePtr img = input_pool_[e].nextWithData(static_cast<std::size_t>(3 * w_) * h_);
       img->header.stamp = stamp;
       img->header.frame_id = info_[e].header.frame_id;
       img->width = w_;
@@ -300,9 +347,9 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     char name[32];
     std::snprintf(name, sizeof(name), "%dx%d", w_, h_);
-    // Frames the nodelet took from its input queues, per eye, from its heartbeat ("left: N in").
+    // Frames the nodelet took from its input queues, per eye, from /diagnostics ("left frames in: N").
     long long taken[2] = {-1, -1};
-    const char* eyes[2] = {"left: ", "right: "};
+    const char* eyes[2] = {"left frames in: ", "right frames in: "};
     for (int e = 0; e < 2; ++e)
     {
       const std::size_t at = status_.find(eyes[e]);
@@ -323,7 +370,7 @@ public:
                   "process below)\n",
                   name, rate, seconds, static_cast<unsigned long long>(in_[0]),
                   static_cast<unsigned long long>(in_[1]));
-    std::printf("nodelet per-frame cost (its heartbeat): %s\n", status_.c_str());
+    std::printf("nodelet per-frame cost (/diagnostics): %s\n", status_.c_str());
     // Where frames were lost: before the nodelet's callback (subscription/synchroniser queues
     // overflowing while it is stalled) or after it (the viewer's queue).
     for (int e = 0; e < 2; ++e)
@@ -346,7 +393,8 @@ private:
   int w_, h_;
   ros::Publisher image_pub_[2], info_pub_[2], pose_pub_[2], dist_pub_;
   ros::Subscriber out_sub_[2], status_sub_;
-  ImagePool input_pool_[2];
+  saras_common::MessagePool<sensor_msgs::Image> input_pool_[2]{saras_common::MessagePool<sensor_msgs::Image>(6),
+                                                              saras_common::MessagePool<sensor_msgs::Image>(6)};
   bool count_outputs_;
   std::string status_;
   ros::WallTime status_stamp_;

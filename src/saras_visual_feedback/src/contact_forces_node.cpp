@@ -2,15 +2,15 @@
 // One instance per side, in the tool's namespace (e.g. /mesa_left):
 //   subscribes  contact        saras_msgs/Contact
 //   publishes   contact_force  geometry_msgs/Twist (linear = force [N], angular = 0) at ~rate
-//               /saras/status  saras_msgs/ComponentStatus (1 Hz + on change)
+//               /diagnostics   diagnostic_msgs/DiagnosticArray ("<node>: contact force", hardware_id visual_feedback)
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include <geometry_msgs/Twist.h>
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
-#include <saras_msgs/ComponentStatus.h>
 #include <saras_msgs/Contact.h>
 
 #include "saras_visual_feedback/contact_force.h"
@@ -35,11 +35,11 @@ public:
     pnh.param("rate", rate, rate);
     if (!(std::isfinite(rate) && rate > 0.0 && rate <= 1000.0))
       throw std::runtime_error("invalid parameter ~rate: must be in (0, 1000] Hz, got " + std::to_string(rate));
-    pnh.param<std::string>("component", component_, ros::this_node::getName());
     model_ = ContactForceModel(p);
 
     force_pub_ = nh_.advertise<geometry_msgs::Twist>("contact_force", 10);
-    status_pub_ = nh_.advertise<saras_msgs::ComponentStatus>("/saras/status", 10, true);
+    updater_.setHardwareID("visual_feedback");
+    updater_.add("contact force", this, &ContactForcesNode::diagnose);
     contact_sub_ = nh_.subscribe("contact", 10, &ContactForcesNode::contactCb, this,
                                  ros::TransportHints().tcpNoDelay());
     timer_ = nh_.createTimer(ros::Duration(1.0 / rate), &ContactForcesNode::timerCb, this);
@@ -68,50 +68,33 @@ private:
     msg_.linear.y = f.y;
     msg_.linear.z = f.z;  // angular stays zero
     force_pub_.publish(msg_);
-    publishStatus(now);
+    updater_.update();  // at ~diagnostic_period (1 s)
   }
 
-  void publishStatus(const ros::Time& now)
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
   {
-    const double t = now.toSec();
-    std::uint8_t level = saras_msgs::ComponentStatus::OK;
-    const char* text = "contact fresh";
+    using diagnostic_msgs::DiagnosticStatus;
+    const double t = ros::Time::now().toSec();
+    stat.addf("accepted contacts", "%llu", static_cast<unsigned long long>(model_.accepted()));
+    stat.addf("rejected contacts", "%llu", static_cast<unsigned long long>(model_.rejected()));
+    stat.addf("contact age [s]", "%.3f", model_.age(t));  // inf before the first valid contact
+    stat.addf("stale_timeout [s]", "%.3f", model_.params().stale_timeout);
     if (!model_.fresh(t))
-    {
-      level = saras_msgs::ComponentStatus::STALE;
-      text = "no valid contact within stale_timeout: publishing zero force";
-    }
+      stat.summary(DiagnosticStatus::STALE, "no valid contact within stale_timeout: publishing zero force");
     else if (model_.rejected() > rejected_reported_)
-    {
-      level = saras_msgs::ComponentStatus::WARN;
-      text = "rejected contact messages (NaN, negative depth or zero-length direction)";
-    }
-    if (level == last_level_ && !last_status_.isZero() && (now - last_status_).toSec() < 1.0)
-      return;
-    saras_msgs::ComponentStatus s;
-    s.header.stamp = now;
-    s.component = component_;
-    s.level = level;
-    s.message = text;
-    const double age = model_.age(t);
-    s.input_age = age;  // +inf before the first valid contact
-    s.received = model_.accepted();
-    s.rejected = model_.rejected();
-    status_pub_.publish(s);
-    last_level_ = level;
-    last_status_ = now;
+      stat.summary(DiagnosticStatus::WARN, "rejected contact messages (NaN, negative depth or zero-length direction)");
+    else
+      stat.summary(DiagnosticStatus::OK, "contact fresh");
     rejected_reported_ = model_.rejected();
   }
 
   ros::NodeHandle nh_;
   ContactForceModel model_;
-  std::string component_;
   ros::Subscriber contact_sub_;
-  ros::Publisher force_pub_, status_pub_;
+  ros::Publisher force_pub_;
+  diagnostic_updater::Updater updater_;
   ros::Timer timer_;
   geometry_msgs::Twist msg_;  ///< reused: no allocation in the periodic path
-  std::uint8_t last_level_ = 255;
-  ros::Time last_status_;
   std::uint64_t rejected_reported_ = 0;
 };
 

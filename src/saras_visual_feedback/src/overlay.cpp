@@ -77,8 +77,8 @@ bool validateStyle(const OverlayStyle& s, std::string* error)
     return fail("circle_radius must be in [1, 100] px");
   if (s.marker_size < 4 || s.marker_size > 200)
     return fail("marker_size must be in [4, 200] px");
-  if (s.shaft_segments < 1 || s.shaft_segments > 64)
-    return fail("shaft_segments must be in [1, 64]");
+  if (s.shaft_segments < 1 || s.shaft_segments > kMaxShaftSegments)
+    return fail("shaft_segments must be in [1, " + std::to_string(kMaxShaftSegments) + "]");
   return true;
 }
 
@@ -266,7 +266,48 @@ cv::Point2d borderPoint(const cv::Point2d& direction, const CameraIntrinsics& k,
   return {std::min(std::max(o.x + t * d.x, xmin), xmax), std::min(std::max(o.y + t * d.y, ymin), ymax)};
 }
 
-bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
+namespace
+{
+/// HUD: one line per tool (distance in mm, in its region's colour) and the status line.
+void drawHud(cv::Mat& image, ChannelOrder order, const OverlayStyle& style, const ToolOverlay* tools, std::size_t n,
+             const char* status_line, HudCache* hud)
+{
+  char text[kMaxTools + 1][96];
+  const char* lines[kMaxTools + 1];
+  Rgb colours[kMaxTools + 1];
+  std::size_t m = 0;
+  if (style.draw_hud)
+  {
+    for (std::size_t i = 0; i < n; ++i, ++m)
+    {
+      const ToolOverlay& tool = tools[i];
+      if (!tool.visible)
+        std::snprintf(text[m], sizeof(text[m]), "%s: no pose", tool.label);
+      else if (std::isnan(tool.distance))
+        std::snprintf(text[m], sizeof(text[m]), "%s: -- mm", tool.label);
+      else
+        std::snprintf(text[m], sizeof(text[m]), "%s: %.1f mm", tool.label, tool.distance * 1e3);
+      lines[m] = text[m];
+      colours[m] = colourOf(classify(tool.distance, style), style);
+    }
+  }
+  if (status_line && status_line[0] != '\0')
+  {
+    lines[m] = status_line;
+    colours[m] = style.unknown_colour;
+    ++m;
+  }
+  if (m > 0)
+  {
+    if (hud)
+      hud->draw(image, order, lines, colours, m);
+    else
+      HudCache().draw(image, order, lines, colours, m);
+  }
+}
+}  // namespace
+
+bool drawOverlay(cv::Mat& image, ChannelOrder order, const RawProjector& camera, const OverlayStyle& style,
                  const ToolOverlay* tools, std::size_t n, ToolDrawResult* results, const char* status_line,
                  HudCache* hud)
 {
@@ -283,15 +324,20 @@ bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, 
     if (tool.visible)
     {
       const cv::Scalar colour = toScalar(colourOf(r.proximity, style), order);
-      const Projection tip = camera.project(tool.tip);
+      // The straight shaft is curved by the lens: projected as a polyline, all points at once.
+      const int segments = tool.has_shaft ? style.shaft_segments : 0;
+      cv::Point3d points[kMaxShaftSegments + 1];
+      Projection proj[kMaxShaftSegments + 1];
+      for (int s = 0; s <= segments; ++s)
+        points[s] = tool.tip + (static_cast<double>(s) / std::max(1, segments)) * (tool.shaft - tool.tip);
+      camera.project(points, static_cast<std::size_t>(segments) + 1, proj);
+      const Projection& tip = proj[0];
       if (tool.has_shaft)
       {
-        // The straight shaft is curved by the lens: draw it as a projected polyline.
         Projection prev = tip;
-        for (int s = 1; s <= style.shaft_segments; ++s)
+        for (int s = 1; s <= segments; ++s)
         {
-          const double a = static_cast<double>(s) / style.shaft_segments;
-          const Projection cur = camera.project(tool.tip + a * (tool.shaft - tool.tip));
+          const Projection& cur = proj[s];
           if (prev.projectable && cur.projectable)
             cv::line(image, toFixedPoint(clampForDrawing(prev.pixel, k), kShift),
                      toFixedPoint(clampForDrawing(cur.pixel, k), kShift), colour, style.line_thickness,
@@ -332,39 +378,7 @@ bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, 
       results[i] = r;
   }
 
-  // HUD: one line per tool (distance in mm, in its region's colour) and the status line.
-  char text[kMaxTools + 1][96];
-  const char* lines[kMaxTools + 1];
-  Rgb colours[kMaxTools + 1];
-  std::size_t m = 0;
-  if (style.draw_hud)
-  {
-    for (std::size_t i = 0; i < n; ++i, ++m)
-    {
-      const ToolOverlay& tool = tools[i];
-      if (!tool.visible)
-        std::snprintf(text[m], sizeof(text[m]), "%s: no pose", tool.label);
-      else if (std::isnan(tool.distance))
-        std::snprintf(text[m], sizeof(text[m]), "%s: -- mm", tool.label);
-      else
-        std::snprintf(text[m], sizeof(text[m]), "%s: %.1f mm", tool.label, tool.distance * 1e3);
-      lines[m] = text[m];
-      colours[m] = colourOf(classify(tool.distance, style), style);
-    }
-  }
-  if (status_line && status_line[0] != '\0')
-  {
-    lines[m] = status_line;
-    colours[m] = style.unknown_colour;
-    ++m;
-  }
-  if (m > 0)
-  {
-    if (hud)
-      hud->draw(image, order, lines, colours, m);
-    else
-      HudCache().draw(image, order, lines, colours, m);
-  }
+  drawHud(image, order, style, tools, n, status_line, hud);
   return true;
 }
 

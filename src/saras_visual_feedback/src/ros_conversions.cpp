@@ -1,75 +1,225 @@
 #include "saras_visual_feedback/ros_conversions.h"
 
+#include <cmath>
+#include <cstring>
+
+#include <cv_bridge/cv_bridge.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2/LinearMath/Transform.h>
+#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
 
 namespace saras_visual_feedback
 {
+namespace enc = sensor_msgs::image_encodings;
 
-bool intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info, CameraIntrinsics* out, std::string* error)
+namespace
 {
-  auto fail = [error](const std::string& why) {
-    if (error)
-      *error = why;
-    return false;
-  };
-  CameraIntrinsics k;
-  if (!parseDistortionModel(info.distortion_model, &k.model))
-    return fail("unsupported distortion_model '" + info.distortion_model + "'");
+/// Checks the number of distortion coefficients for the model.
+bool checkDistortion(const sensor_msgs::CameraInfo& info, DistortionModel model, std::string* why)
+{
   const std::size_t nd = info.D.size();
   bool all_zero = true;
   for (double c : info.D)
     all_zero = all_zero && c == 0.0;
-  switch (k.model)
+  switch (model)
   {
     case DistortionModel::kPlumbBob:
       if (nd != 4 && nd != 5 && nd != 8)  // 8: some drivers send rational-sized D as plumb_bob
-        return fail("plumb_bob needs 5 distortion coefficients, got " + std::to_string(nd));
+        *why = "plumb_bob needs 5 distortion coefficients, got " + std::to_string(nd);
       break;
     case DistortionModel::kRationalPolynomial:
       if (nd != 8)
-        return fail("rational_polynomial needs 8 distortion coefficients, got " + std::to_string(nd));
+        *why = "rational_polynomial needs 8 distortion coefficients, got " + std::to_string(nd);
       break;
     case DistortionModel::kEquidistant:
       if (nd != 4)
-        return fail("equidistant needs 4 distortion coefficients, got " + std::to_string(nd));
+        *why = "equidistant needs 4 distortion coefficients, got " + std::to_string(nd);
       break;
     case DistortionModel::kNone:
       if (!all_zero)
-        return fail("distortion coefficients given without a distortion_model");
+        *why = "distortion coefficients given without a distortion_model";
       break;
   }
-  for (std::size_t i = 0; i < nd && i < k.d.size(); ++i)
-    k.d[i] = info.D[i];
-  if (k.model == DistortionModel::kPlumbBob)
-    for (std::size_t i = 5; i < k.d.size(); ++i)
-      k.d[i] = (nd == 8) ? info.D[i] : 0.0;
+  return why->empty();
+}
+}  // namespace
 
-  const double bx = info.binning_x > 1 ? info.binning_x : 1.0;
-  const double by = info.binning_y > 1 ? info.binning_y : 1.0;
-  const auto& roi = info.roi;
-  const bool full_roi = roi.width == 0 || roi.height == 0 || (roi.x_offset == 0 && roi.y_offset == 0 &&
-                                                              roi.width == info.width && roi.height == info.height);
-  const double x0 = full_roi ? 0.0 : roi.x_offset, y0 = full_roi ? 0.0 : roi.y_offset;
-  const double w = full_roi ? info.width : roi.width, h = full_roi ? info.height : roi.height;
-  k.fx = info.K[0] / bx;
-  k.fy = info.K[4] / by;
-  k.cx = (info.K[2] - x0) / bx;
-  k.cy = (info.K[5] - y0) / by;
-  k.width = static_cast<int>(w / bx);
-  k.height = static_cast<int>(h / by);
-  CameraModel check;
+bool intrinsicsFromCameraModel(const image_geometry::PinholeCameraModel& model, CameraIntrinsics* out,
+                               std::string* error)
+{
+  std::string why;
+  const sensor_msgs::CameraInfo& info = model.cameraInfo();
+  CameraIntrinsics k;
+  if (!parseDistortionModel(info.distortion_model, &k.model))
+    why = "unsupported distortion_model '" + info.distortion_model + "'";
+  else
+    checkDistortion(info, k.model, &why);
+  if (!why.empty())
+  {
+    if (error)
+      *error = why;
+    return false;
+  }
+  const cv::Mat_<double>& d = model.distortionCoeffs();
+  for (int i = 0; i < static_cast<int>(d.total()) && i < static_cast<int>(k.d.size()); ++i)
+    k.d[i] = d(i);
+  const cv::Matx33d& K = model.intrinsicMatrix();  // binning and ROI applied
+  const cv::Size size = model.reducedResolution();
+  k.fx = K(0, 0);
+  k.fy = K(1, 1);
+  k.cx = K(0, 2);
+  k.cy = K(1, 2);
+  k.width = size.width;
+  k.height = size.height;
+  RawProjector check;
   if (!check.configure(k, error))
     return false;
   *out = k;
   return true;
 }
 
-bool sameCalibration(const sensor_msgs::CameraInfo& a, const sensor_msgs::CameraInfo& b)
+bool intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info, CameraIntrinsics* out, std::string* error)
 {
-  return a.width == b.width && a.height == b.height && a.distortion_model == b.distortion_model && a.D == b.D &&
-         a.K == b.K && a.binning_x == b.binning_x && a.binning_y == b.binning_y && a.roi.x_offset == b.roi.x_offset &&
-         a.roi.y_offset == b.roi.y_offset && a.roi.width == b.roi.width && a.roi.height == b.roi.height;
+  image_geometry::PinholeCameraModel model;
+  model.fromCameraInfo(info);
+  return intrinsicsFromCameraModel(model, out, error);
 }
+
+const std::string& EyeCamera::update(const sensor_msgs::CameraInfo& info, std::uint32_t width, std::uint32_t height)
+{
+  if (model_.fromCameraInfo(info) || !seen_)
+  {
+    seen_ = true;
+    CameraIntrinsics k;
+    if (intrinsicsFromCameraModel(model_, &k, &model_error_) && projector_.configure(k, &model_error_))
+      model_error_.clear();
+    else
+      projector_ = RawProjector();
+  }
+  error_ = model_error_;
+  const CameraIntrinsics& k = projector_.intrinsics();
+  if (error_.empty() && (k.width != static_cast<int>(width) || k.height != static_cast<int>(height)))
+    error_ = "camera_info size " + std::to_string(k.width) + "x" + std::to_string(k.height) + " != image size " +
+             std::to_string(width) + "x" + std::to_string(height);
+  return error_;
+}
+
+bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, saras_common::MessagePool<sensor_msgs::Image>* pool, sensor_msgs::ImagePtr* out,
+                   cv::Mat* canvas, ChannelOrder* order, std::string* error)
+{
+  if (!imageBufferConsistent(*image, error))
+    return false;
+  const std::string& e = image->encoding;
+  *order = ChannelOrder::kBgr;
+  try
+  {
+    if (e == enc::BGR8 || e == enc::BGRA8 || e == enc::RGB8 || e == enc::RGBA8)
+    {
+      // The input is shared and const when zero-copied from the camera nodelet: copied once.
+      *order = (e == enc::RGB8 || e == enc::RGBA8) ? ChannelOrder::kRgb : ChannelOrder::kBgr;
+      sensor_msgs::ImagePtr m = pool->nextWithData(image->data.size());
+      m->header = image->header;
+      m->height = image->height;
+      m->width = image->width;
+      m->encoding = image->encoding;
+      m->is_bigendian = image->is_bigendian;
+      m->step = image->step;
+      std::memcpy(m->data.data(), image->data.data(), image->data.size());
+      *out = m;
+    }
+    else
+      *out = cv_bridge::toCvCopy(image, enc::BGR8)->toImageMsg();  // mono, bayer, 16 bit (allocates)
+  }
+  catch (const std::exception& ex)
+  {
+    *error = "cannot convert encoding '" + e + "' (" + ex.what() + ")";
+    return false;
+  }
+  const sensor_msgs::Image& m = **out;
+  *canvas = cv::Mat(static_cast<int>(m.height), static_cast<int>(m.width),
+                    enc::numChannels(m.encoding) == 4 ? CV_8UC4 : CV_8UC3, const_cast<std::uint8_t*>(m.data.data()),
+                    m.step);
+  return true;
+}
+
+bool poseSampleFromMsg(const geometry_msgs::PoseStamped& msg, const ros::Time& now, TimedPose* sample,
+                       std::string* error)
+{
+  const geometry_msgs::Point& p = msg.pose.position;
+  const geometry_msgs::Quaternion& q = msg.pose.orientation;
+  if (msg.header.frame_id.empty())
+    *error = "empty frame_id";
+  else if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(q.x) &&
+             std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w)))
+    *error = "NaN/inf value";
+  else
+    error->clear();
+  if (!error->empty())
+    return false;
+  *sample = TimedPose();
+  sample->stamp_ns = static_cast<std::int64_t>((msg.header.stamp.isZero() ? now : msg.header.stamp).toNSec());
+  sample->position[0] = p.x;
+  sample->position[1] = p.y;
+  sample->position[2] = p.z;
+  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+  if (norm > 1e-9)  // unset orientation (all zero): identity (only the tip position is drawn)
+  {
+    sample->orientation[0] = q.x / norm;
+    sample->orientation[1] = q.y / norm;
+    sample->orientation[2] = q.z / norm;
+    sample->orientation[3] = q.w / norm;
+  }
+  return true;
+}
+
+bool encodeJpeg(const cv::Mat& canvas, ChannelOrder order, const std::string& encoding, int quality, cv::Mat* scratch,
+                sensor_msgs::CompressedImage* out)
+{
+  const cv::Mat* bgr = &canvas;
+  if (canvas.channels() == 4)
+    cv::cvtColor(canvas, *scratch, order == ChannelOrder::kRgb ? cv::COLOR_RGBA2BGR : cv::COLOR_BGRA2BGR);
+  else if (order == ChannelOrder::kRgb)
+    cv::cvtColor(canvas, *scratch, cv::COLOR_RGB2BGR);
+  if (canvas.channels() == 4 || order == ChannelOrder::kRgb)
+    bgr = scratch;
+  out->format = encoding + "; jpeg compressed bgr8";
+  return cv::imencode(".jpg", *bgr, out->data, {cv::IMWRITE_JPEG_QUALITY, quality});
+}
+
+bool TfPointTransformer::transform(const std::string& target, const std::string& source, std::int64_t stamp_ns,
+                                   const cv::Point3d& p, cv::Point3d* out, bool* at_stamp, std::string* error) const
+{
+  geometry_msgs::TransformStamped t;
+  *at_stamp = true;
+  ros::Time stamp;  // kLatestStamp: the latest transform (time 0)
+  if (stamp_ns != kLatestStamp)
+    stamp.fromNSec(static_cast<std::uint64_t>(stamp_ns));
+  try
+  {
+    t = buffer_.lookupTransform(target, source, stamp);
+  }
+  catch (const tf2::TransformException&)
+  {
+    *at_stamp = false;
+    try
+    {
+      t = buffer_.lookupTransform(target, source, ros::Time(0));
+    }
+    catch (const tf2::TransformException& e)
+    {
+      *error = e.what();
+      return false;
+    }
+  }
+  tf2::Transform tr;
+  tf2::fromMsg(t.transform, tr);
+  const tf2::Vector3 q = tr * tf2::Vector3(p.x, p.y, p.z);
+  *out = cv::Point3d(q.x(), q.y(), q.z());
+  return true;
+}
+
 
 bool imageBufferConsistent(const sensor_msgs::Image& image, std::string* error)
 {

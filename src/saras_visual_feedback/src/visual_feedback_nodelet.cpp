@@ -1,81 +1,57 @@
 #include "saras_visual_feedback/visual_feedback_nodelet.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <ctime>
 #include <limits>
-#include <sstream>
-#include <stdexcept>
 
 #include <boost/bind/bind.hpp>
 #include <boost/make_shared.hpp>
-#include <cv_bridge/cv_bridge.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
-#include <saras_msgs/ComponentStatus.h>
 #include <sensor_msgs/CompressedImage.h>
-#include <sensor_msgs/image_encodings.h>
-#include <tf2/LinearMath/Transform.h>
-#include <tf2_geometry_msgs/tf2_geometry_msgs.h>
-
-#include "saras_visual_feedback/ros_conversions.h"
 
 namespace saras_visual_feedback
 {
-namespace enc = sensor_msgs::image_encodings;
-
 namespace
 {
-/// A start-up parameter error: names the parameter; makes onInit fail (the node exits non-zero).
-std::runtime_error paramError(const std::string& name, const std::string& why)
+constexpr char kCompressedPlugin[] = "image_transport/compressed";
+
+std::uint64_t threadCpuNs()
 {
-  return std::runtime_error("invalid parameter ~" + name + ": " + why);
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<std::uint64_t>(t.tv_sec) * 1000000000ULL + static_cast<std::uint64_t>(t.tv_nsec);
 }
 
-double readPositive(const ros::NodeHandle& pnh, const std::string& name, double def, const char* unit)
+std::string hexColour(const Rgb& rgb)
 {
-  double v = def;
-  pnh.param(name, v, def);
-  if (!(std::isfinite(v) && v > 0.0))
-    throw paramError(name, "must be finite and > 0 " + std::string(unit) + ", got " + std::to_string(v));
-  return v;
+  char buf[8];
+  std::snprintf(buf, sizeof(buf), "#%02x%02x%02x", rgb.r, rgb.g, rgb.b);
+  return buf;
 }
 
-std::string xmlString(XmlRpc::XmlRpcValue& v, const std::string& key, const std::string& where, bool required,
-                      const std::string& def = "")
+/// The dynamic_reconfigure view of @p s.
+void toConfig(const SceneStyle& s, VisualFeedbackConfig* c)
 {
-  if (!v.hasMember(key))
-  {
-    if (required)
-      throw paramError(where, "missing '" + key + "'");
-    return def;
-  }
-  if (v[key].getType() != XmlRpc::XmlRpcValue::TypeString)
-    throw paramError(where, "'" + key + "' must be a string");
-  return static_cast<std::string>(v[key]);
-}
-
-bool finitePose(const geometry_msgs::Pose& p)
-{
-  return std::isfinite(p.position.x) && std::isfinite(p.position.y) && std::isfinite(p.position.z) &&
-         std::isfinite(p.orientation.x) && std::isfinite(p.orientation.y) && std::isfinite(p.orientation.z) &&
-         std::isfinite(p.orientation.w);
-}
-
-void atomicMax(std::atomic<std::uint64_t>& a, std::uint64_t v)
-{
-  std::uint64_t cur = a.load();
-  while (v > cur && !a.compare_exchange_weak(cur, v))
-  {
-  }
+  c->collision_threshold = s.overlay.collision_threshold;
+  c->warning_threshold = s.overlay.warning_threshold;
+  c->collision_colour = hexColour(s.overlay.collision_colour);
+  c->warning_colour = hexColour(s.overlay.warning_colour);
+  c->safe_colour = hexColour(s.overlay.safe_colour);
+  c->unknown_colour = hexColour(s.overlay.unknown_colour);
+  c->line_thickness = s.overlay.line_thickness;
+  c->circle_radius = s.overlay.circle_radius;
+  c->marker_size = s.overlay.marker_size;
+  c->draw_hud = s.overlay.draw_hud;
+  c->shaft_length = s.shaft_length;
+  c->draw_dvrk = s.draw_dvrk;
 }
 }  // namespace
 
 VisualFeedbackNodelet::~VisualFeedbackNodelet()
 {
-  status_timer_.stop();
+  diagnostics_timer_.stop();
   // Unloading: shut the subscriptions and publishers down here, under connect_mutex_, so that a
   // connection callback racing with the destruction (a viewer leaving as the publishers go away)
   // cannot shut the same subscription down concurrently with the member destructors.
@@ -85,173 +61,93 @@ VisualFeedbackNodelet::~VisualFeedbackNodelet()
   {
     eye.sub.shutdown();
     eye.pub.shutdown();
-    eye.compressed_pub.shutdown();
+    eye.jpeg_pub.shutdown();
   }
-  for (Tool& t : tools_)
-    t.sub.shutdown();
+  for (ros::Subscriber& s : pose_subs_)
+    s.shutdown();
   distances_sub_.shutdown();
-}
-
-void VisualFeedbackNodelet::readParameters()
-{
-  ros::NodeHandle& pnh = getPrivateNodeHandle();
-  OverlayStyle s;
-  pnh.param("collision_threshold", s.collision_threshold, s.collision_threshold);
-  pnh.param("warning_threshold", s.warning_threshold, s.warning_threshold);
-  const char* colour_names[4] = {"collision_colour", "warning_colour", "safe_colour", "unknown_colour"};
-  Rgb* colours[4] = {&s.collision_colour, &s.warning_colour, &s.safe_colour, &s.unknown_colour};
-  for (int i = 0; i < 4; ++i)
-  {
-    std::string text;
-    if (pnh.getParam(colour_names[i], text) && !parseColour(text, colours[i]))
-      throw paramError(colour_names[i], "must be \"#RRGGBB\", got \"" + text + "\"");
-  }
-  pnh.param("line_thickness", s.line_thickness, s.line_thickness);
-  pnh.param("circle_radius", s.circle_radius, s.circle_radius);
-  pnh.param("marker_size", s.marker_size, s.marker_size);
-  pnh.param("shaft_segments", s.shaft_segments, s.shaft_segments);
-  pnh.param("draw_hud", s.draw_hud, s.draw_hud);
-  std::string why;
-  if (!validateStyle(s, &why))
-    throw paramError(why.substr(0, why.find(' ')), why);
-  style_ = s;
-  shaft_length_ = readPositive(pnh, "shaft_length", 0.05, "[m]");
-  pnh.param("draw_dvrk", draw_dvrk_, true);
-  pose_timeout_ = readPositive(pnh, "pose_timeout", 0.5, "[s]");
-  distances_timeout_ = readPositive(pnh, "distances_timeout", 0.5, "[s]");
-  image_timeout_ = readPositive(pnh, "image_timeout", 1.0, "[s]");
-  pnh.param("pose_buffer_size", pose_buffer_size_, 512);
-  if (pose_buffer_size_ < 2 || pose_buffer_size_ > 100000)
-    throw paramError("pose_buffer_size", "must be in [2, 100000] samples, got " + std::to_string(pose_buffer_size_));
-  pnh.param("pose_stamp_tolerance", pose_stamp_tolerance_, 0.03);
-  if (!(std::isfinite(pose_stamp_tolerance_) && pose_stamp_tolerance_ >= 0.0))
-    throw paramError("pose_stamp_tolerance", "must be finite and >= 0 [s], got " + std::to_string(pose_stamp_tolerance_));
-  pnh.param("jpeg_quality", jpeg_quality_, 80);
-  if (jpeg_quality_ < 1 || jpeg_quality_ > 100)
-    throw paramError("jpeg_quality", "must be in [1, 100], got " + std::to_string(jpeg_quality_));
-  pnh.param("queue_size", queue_size_, 6);
-  if (queue_size_ < 1)
-    throw paramError("queue_size", "must be >= 1");
-  pnh.param<std::string>("component", component_, getName());
-
-  XmlRpc::XmlRpcValue list;
-  if (!pnh.getParam("tools", list))
-  {
-    // Defaults: the contract's topics and frames.
-    list.setSize(0);
-    const char* names[4] = {"mesa_left", "mesa_right", "PSM1", "PSM2"};
-    const char* topics[4] = {"/mesa_left/ee_pose", "/mesa_right/ee_pose", "/dvrk/PSM1/position_cartesian_current",
-                             "/dvrk/PSM2/position_cartesian_current"};
-    const char* rcm[4] = {"mesa_left/rcm", "mesa_right/rcm", "PSM1", "PSM2"};
-    for (int i = 0; i < 4; ++i)
-    {
-      list[i]["name"] = std::string(names[i]);
-      list[i]["pose_topic"] = std::string(topics[i]);
-      list[i]["rcm_frame"] = std::string(rcm[i]);
-      list[i]["distance_index"] = i;
-      list[i]["dvrk"] = i >= 2;
-    }
-  }
-  if (list.getType() != XmlRpc::XmlRpcValue::TypeArray || list.size() < 1 ||
-      list.size() > static_cast<int>(kMaxTools))
-    throw paramError("tools", "must be a list of 1 to " + std::to_string(kMaxTools) + " tools");
-  tools_ = std::vector<Tool>(list.size());
-  for (int i = 0; i < list.size(); ++i)
-  {
-    const std::string where = "tools[" + std::to_string(i) + "]";
-    if (list[i].getType() != XmlRpc::XmlRpcValue::TypeStruct)
-      throw paramError(where, "must be a dictionary");
-    Tool& t = tools_[i];
-    t.history.setCapacity(static_cast<std::size_t>(pose_buffer_size_));
-    t.name = xmlString(list[i], "name", where, true);
-    t.label = xmlString(list[i], "label", where, false, t.name);
-    t.pose_topic = xmlString(list[i], "pose_topic", where, true);
-    t.rcm_frame = xmlString(list[i], "rcm_frame", where, false);
-    if (!list[i].hasMember("distance_index") || list[i]["distance_index"].getType() != XmlRpc::XmlRpcValue::TypeInt ||
-        static_cast<int>(list[i]["distance_index"]) < 0)
-      throw paramError(where, "'distance_index' must be an integer >= 0 (index in /collision/distances)");
-    t.distance_index = static_cast<int>(list[i]["distance_index"]);
-    if (list[i].hasMember("dvrk"))
-    {
-      if (list[i]["dvrk"].getType() != XmlRpc::XmlRpcValue::TypeBoolean)
-        throw paramError(where, "'dvrk' must be a boolean");
-      t.dvrk = static_cast<bool>(list[i]["dvrk"]);
-    }
-    if (t.name.empty() || t.pose_topic.empty())
-      throw paramError(where, "'name' and 'pose_topic' must not be empty");
-  }
 }
 
 void VisualFeedbackNodelet::onInit()
 {
   try
   {
-    readParameters();
+    params_ = readVisualFeedbackParams(getPrivateNodeHandle());
   }
   catch (const std::exception& e)
   {
     NODELET_FATAL("%s", e.what());
-    throw;  // nodelet::Loader::load() fails: the standalone node and `nodelet load` exit non-zero
+    throw;  // nodelet::Loader::load() fails: `nodelet standalone` and `nodelet load` exit non-zero
   }
-  ros::NodeHandle& nh = getNodeHandle();
-  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  const VisualFeedbackParams& p = params_;
+  scene_.reset(new ToolScene(p.tools, static_cast<std::size_t>(p.pose_buffer_size),
+                             static_cast<std::int64_t>(p.pose_timeout * 1e9),
+                             static_cast<std::int64_t>(p.distances_timeout * 1e9), p.style));
+  pose_subs_.resize(p.tools.size());
   tf_buffer_.reset(new tf2_ros::Buffer(ros::Duration(10.0)));
-  tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh));
+  tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, getNodeHandle()));
+  tf_points_.reset(new TfPointTransformer(*tf_buffer_));
   // Multi-threaded handle: the two eyes are processed in parallel (each eye's callback is
   // serialised by its own mutex, as image and camera_info may complete a pair from two threads).
   it_ = std::make_shared<image_transport::ImageTransport>(getMTNodeHandle());
   eyes_[0].name = "left";
   eyes_[1].name = "right";
+  startReconfigure();
 
-  reconfigure_server_.reset(new ReconfigureServer(reconfigure_mutex_, pnh));
-  {
-    // Start the server from the validated start-up values.
-    VisualFeedbackConfig c;
-    reconfigure_server_->getConfigDefault(c);
-    c.collision_threshold = style_.collision_threshold;
-    c.warning_threshold = style_.warning_threshold;
-    char buf[8];
-    auto hex = [&buf](const Rgb& rgb) {
-      std::snprintf(buf, sizeof(buf), "#%02x%02x%02x", rgb.r, rgb.g, rgb.b);
-      return std::string(buf);
-    };
-    c.collision_colour = hex(style_.collision_colour);
-    c.warning_colour = hex(style_.warning_colour);
-    c.safe_colour = hex(style_.safe_colour);
-    c.unknown_colour = hex(style_.unknown_colour);
-    c.line_thickness = style_.line_thickness;
-    c.circle_radius = style_.circle_radius;
-    c.marker_size = style_.marker_size;
-    c.shaft_length = shaft_length_;
-    c.draw_hud = style_.draw_hud;
-    c.draw_dvrk = draw_dvrk_;
-    reconfigure_server_->updateConfig(c);
-  }
+  // Diagnostics under this nodelet's name (not the manager's), hardware_id visual_feedback.
+  updater_.reset(new diagnostic_updater::Updater(getNodeHandle(), getPrivateNodeHandle(), getName()));
+  updater_->setHardwareID("visual_feedback");
+  updater_->add("augmented images", this, &VisualFeedbackNodelet::diagnose);
+  last_report_ = ros::WallTime::now();
+  diagnostics_timer_ =
+      getNodeHandle().createWallTimer(ros::WallDuration(0.1), [this](const ros::WallTimerEvent&) { updater_->update(); });
+  advertise();
+}
+
+void VisualFeedbackNodelet::startReconfigure()
+{
+  reconfigure_server_.reset(new ReconfigureServer(reconfigure_mutex_, getPrivateNodeHandle()));
+  VisualFeedbackConfig c;  // the server starts from the validated start-up values
+  reconfigure_server_->getConfigDefault(c);
+  toConfig(params_.style, &c);
+  reconfigure_server_->updateConfig(c);
   reconfigure_server_->setCallback(
       boost::bind(&VisualFeedbackNodelet::reconfigureCb, this, boost::placeholders::_1, boost::placeholders::_2));
+}
 
-  status_pub_ = nh.advertise<saras_msgs::ComponentStatus>("/saras/status", 10);
-  last_status_ = ros::WallTime::now();
-  status_timer_ = nh.createWallTimer(ros::WallDuration(0.1), &VisualFeedbackNodelet::statusTimerCb, this);
+bool VisualFeedbackNodelet::compressedPluginActive(const std::string& topic) const
+{
+  const std::vector<std::string> loadable = it_->getLoadableTransports();
+  if (std::find(loadable.begin(), loadable.end(), kCompressedPlugin) == loadable.end())
+    return false;
+  std::vector<std::string> disabled;  // image_transport's own per-topic blacklist
+  getNodeHandle().getParam(topic + "/disable_pub_plugins", disabled);
+  return std::find(disabled.begin(), disabled.end(), kCompressedPlugin) == disabled.end();
+}
 
+void VisualFeedbackNodelet::advertise()
+{
   // Advertise under connect_mutex_ so that connectCb cannot run before the publishers exist.
   std::lock_guard<std::mutex> lock(connect_mutex_);
   image_transport::SubscriberStatusCallback cb = boost::bind(&VisualFeedbackNodelet::connectCb, this);
   ros::SubscriberStatusCallback ros_cb = boost::bind(&VisualFeedbackNodelet::connectCb, this);
+  const auto queue = static_cast<uint32_t>(params_.queue_size);
   for (Eye& eye : eyes_)
   {
     // Publisher queue: only used for subscribers in other processes (serialised frames waiting
     // for the socket); intra-process subscribers get the shared pointer in their own queue.
-    eye.pub = it_->advertise(eye.name + "/image", static_cast<uint32_t>(queue_size_), cb, cb);
-    // JPEG stream for remote viewers (what compressed_image_transport would publish; that plugin
-    // is not packaged in Debian). Encoded only while subscribed.
-    eye.compressed_pub = getMTNodeHandle().advertise<sensor_msgs::CompressedImage>(eye.pub.getTopic() + "/compressed",
-                                                                                   1, ros_cb, ros_cb);
+    eye.pub = it_->advertise(eye.name + "/image", queue, cb, cb);
+    // One /compressed stream per eye: image_transport's plugin when it is active, else ours.
+    own_jpeg_ = !compressedPluginActive(eye.pub.getTopic());
+    if (own_jpeg_)
+      eye.jpeg_pub = getMTNodeHandle().advertise<sensor_msgs::CompressedImage>(eye.pub.getTopic() + "/compressed", 1,
+                                                                               ros_cb, ros_cb);
   }
-  NODELET_INFO("VisualFeedback ready: %zu tools, thresholds collision %.4f m, warning %.4f m (lazy: waiting for "
-               "subscribers of %s and %s)",
-               tools_.size(), style_.collision_threshold, style_.warning_threshold, eyes_[0].pub.getTopic().c_str(),
-               eyes_[1].pub.getTopic().c_str());
+  NODELET_INFO("VisualFeedback ready: %zu tools, thresholds collision %.4f m, warning %.4f m, /compressed by %s "
+               "(lazy: waiting for subscribers of %s and %s)",
+               params_.tools.size(), params_.style.overlay.collision_threshold,
+               params_.style.overlay.warning_threshold, own_jpeg_ ? "this nodelet" : "image_transport",
+               eyes_[0].pub.getTopic().c_str(), eyes_[1].pub.getTopic().c_str());
 }
 
 void VisualFeedbackNodelet::connectCb()
@@ -259,19 +155,14 @@ void VisualFeedbackNodelet::connectCb()
   std::lock_guard<std::mutex> lock(connect_mutex_);
   if (shutting_down_)
     return;
-  ros::NodeHandle& nh = getMTNodeHandle();
   bool any = false;
   for (std::size_t i = 0; i < eyes_.size(); ++i)
   {
     Eye& eye = eyes_[i];
-    if (eye.pub.getNumSubscribers() == 0 && eye.compressed_pub.getNumSubscribers() == 0)
+    if (eye.pub.getNumSubscribers() == 0 && eye.jpeg_pub.getNumSubscribers() == 0)
     {
       if (eye.sub)
-      {
-        NODELET_DEBUG("no subscribers to %s: unsubscribing the %s camera", eye.pub.getTopic().c_str(),
-                      eye.name.c_str());
         eye.sub.shutdown();
-      }
       continue;
     }
     any = true;
@@ -279,510 +170,232 @@ void VisualFeedbackNodelet::connectCb()
     {
       image_transport::TransportHints hints("raw", ros::TransportHints().tcpNoDelay(), getPrivateNodeHandle());
       eye.sub = it_->subscribeCamera(
-          eye.name + "/image_raw", static_cast<uint32_t>(queue_size_),
+          eye.name + "/image_raw", static_cast<uint32_t>(params_.queue_size),
           boost::bind(&VisualFeedbackNodelet::imageCb, this, boost::placeholders::_1, boost::placeholders::_2, i),
           ros::VoidPtr(), hints);
     }
   }
-  if (any && !subscribed_inputs_)
-  {
-    for (std::size_t i = 0; i < tools_.size(); ++i)
-      tools_[i].sub = nh.subscribe<geometry_msgs::PoseStamped>(
-          tools_[i].pose_topic, 1, boost::bind(&VisualFeedbackNodelet::poseCb, this, boost::placeholders::_1, i),
+  if (any == subscribed_inputs_)
+    return;
+  ros::NodeHandle& nh = getMTNodeHandle();
+  for (std::size_t i = 0; i < pose_subs_.size(); ++i)
+    if (any)
+      pose_subs_[i] = nh.subscribe<geometry_msgs::PoseStamped>(
+          params_.tools[i].pose_topic, 1, boost::bind(&VisualFeedbackNodelet::poseCb, this, boost::placeholders::_1, i),
           ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
-    distances_sub_ = nh.subscribe("distances", 1, &VisualFeedbackNodelet::distancesCb, this,
-                                  ros::TransportHints().tcpNoDelay());
-    subscribed_inputs_ = true;
-  }
-  else if (!any && subscribed_inputs_)
-  {
-    for (Tool& t : tools_)
-      t.sub.shutdown();
+    else
+      pose_subs_[i].shutdown();
+  if (any)
+    distances_sub_ =
+        nh.subscribe("distances", 1, &VisualFeedbackNodelet::distancesCb, this, ros::TransportHints().tcpNoDelay());
+  else
     distances_sub_.shutdown();
-    subscribed_inputs_ = false;
-  }
+  subscribed_inputs_ = any;
 }
 
 void VisualFeedbackNodelet::poseCb(const geometry_msgs::PoseStampedConstPtr& msg, std::size_t i)
 {
-  if (!finitePose(msg->pose) || msg->header.frame_id.empty())
-  {
-    std::uint64_t n;
-    {
-      std::lock_guard<std::mutex> lock(state_mutex_);
-      n = ++tools_[i].rejected;
-    }
-    NODELET_ERROR_THROTTLE(1.0, "rejected pose of %s on %s (%s); %llu rejected so far; the tool is not drawn once "
-                                "the last valid pose is older than %.2f s",
-                           tools_[i].name.c_str(), tools_[i].pose_topic.c_str(),
-                           msg->header.frame_id.empty() ? "empty frame_id" : "NaN/inf value",
-                           static_cast<unsigned long long>(n), pose_timeout_);
-    return;
-  }
-  // The sample is stamped with the pose's header.stamp (receipt time when unstamped), the clock of
-  // the images' stamps, so that imageCb can take the pose at the image stamp.
+  const ToolConfig& t = params_.tools[i];
   const ros::Time now = ros::Time::now();
   TimedPose sample;
-  sample.stamp_ns = static_cast<std::int64_t>((msg->header.stamp.isZero() ? now : msg->header.stamp).toNSec());
-  sample.position[0] = msg->pose.position.x;
-  sample.position[1] = msg->pose.position.y;
-  sample.position[2] = msg->pose.position.z;
-  const geometry_msgs::Quaternion& q = msg->pose.orientation;
-  const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-  if (norm > 1e-9)  // unset orientation (all zero): identity (only the tip position is drawn)
+  std::string why;
+  if (!poseSampleFromMsg(*msg, now, &sample, &why))
   {
-    sample.orientation[0] = q.x / norm;
-    sample.orientation[1] = q.y / norm;
-    sample.orientation[2] = q.z / norm;
-    sample.orientation[3] = q.w / norm;
+    const std::uint64_t n = scene_->rejectPose(i);
+    NODELET_ERROR_THROTTLE(1.0, "rejected pose of %s on %s (%s); %llu rejected so far; the tool is not drawn once "
+                                "the last valid pose is older than %.2f s",
+                           t.name.c_str(), t.pose_topic.c_str(), why.c_str(), static_cast<unsigned long long>(n),
+                           params_.pose_timeout);
+    return;
   }
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  Tool& t = tools_[i];
-  if (t.frame_id != msg->header.frame_id)
-  {
-    t.history.clear();  // poses of different frames are not interpolated
-    t.frame_id = msg->header.frame_id;
-  }
-  if (t.history.push(sample) == PosePush::kRestarted)
-  {
-    ++t.restarts;
-    NODELET_WARN_THROTTLE(5.0, "pose stamps of %s on %s went backwards (clock reset?): pose history restarted "
-                               "(%llu times)",
-                          t.name.c_str(), t.pose_topic.c_str(), static_cast<unsigned long long>(t.restarts));
-  }
-  t.pose_received = now;
+  if (scene_->addPose(i, msg->header.frame_id, sample, static_cast<std::int64_t>(now.toNSec())) ==
+      PosePush::kRestarted)
+    NODELET_WARN_THROTTLE(5.0, "pose stamps of %s on %s went backwards (clock reset?): pose history restarted",
+                          t.name.c_str(), t.pose_topic.c_str());
 }
 
 void VisualFeedbackNodelet::distancesCb(const std_msgs::Float64MultiArrayConstPtr& msg)
 {
-  std::size_t needed = 0;
-  for (const Tool& t : tools_)
-    needed = std::max(needed, static_cast<std::size_t>(t.distance_index) + 1);
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  if (msg->data.size() < needed)
-  {
-    ++distances_rejected_;
+  // NaN entries stay NaN: drawn as unknown.
+  if (!scene_->setDistances(msg->data, static_cast<std::int64_t>(ros::Time::now().toNSec())))
     NODELET_WARN_THROTTLE(5.0, "/collision/distances has %zu values, %zu expected: missing ones are drawn as unknown",
-                          msg->data.size(), needed);
-  }
-  distances_.assign(msg->data.begin(), msg->data.end());  // NaN entries stay NaN: drawn as unknown
-  distances_received_ = ros::Time::now();
+                          msg->data.size(), scene_->distancesNeeded());
 }
 
 void VisualFeedbackNodelet::reconfigureCb(VisualFeedbackConfig& c, uint32_t /*level*/)
 {
-  std::lock_guard<std::mutex> lock(state_mutex_);
-  OverlayStyle s = style_;
-  s.collision_threshold = c.collision_threshold;
-  s.warning_threshold = c.warning_threshold;
-  s.line_thickness = c.line_thickness;
-  s.circle_radius = c.circle_radius;
-  s.marker_size = c.marker_size;
-  s.draw_hud = c.draw_hud;
-  std::string why;
-  bool ok = parseColour(c.collision_colour, &s.collision_colour) && parseColour(c.warning_colour, &s.warning_colour) &&
-            parseColour(c.safe_colour, &s.safe_colour) && parseColour(c.unknown_colour, &s.unknown_colour);
-  if (!ok)
-    why = "colours must be \"#RRGGBB\"";
-  else
-    ok = validateStyle(s, &why);
-  if (!ok)
+  SceneStyle s = scene_->style();
+  const SceneStyle current = s;
+  OverlayStyle& o = s.overlay;
+  o.collision_threshold = c.collision_threshold;
+  o.warning_threshold = c.warning_threshold;
+  o.line_thickness = c.line_thickness;
+  o.circle_radius = c.circle_radius;
+  o.marker_size = c.marker_size;
+  o.draw_hud = c.draw_hud;
+  s.shaft_length = c.shaft_length;
+  s.draw_dvrk = c.draw_dvrk;
+  std::string why = "colours must be \"#RRGGBB\"";
+  const bool ok = parseColour(c.collision_colour, &o.collision_colour) &&
+                  parseColour(c.warning_colour, &o.warning_colour) && parseColour(c.safe_colour, &o.safe_colour) &&
+                  parseColour(c.unknown_colour, &o.unknown_colour) && validateStyle(o, &why);
+  if (ok)
   {
-    NODELET_ERROR("dynamic_reconfigure request rejected (%s); keeping collision_threshold %.4f m, warning_threshold "
-                  "%.4f m",
-                  why.c_str(), style_.collision_threshold, style_.warning_threshold);
-    // Report the values actually in use back to the client.
-    char buf[8];
-    auto hex = [&buf](const Rgb& rgb) {
-      std::snprintf(buf, sizeof(buf), "#%02x%02x%02x", rgb.r, rgb.g, rgb.b);
-      return std::string(buf);
-    };
-    c.collision_threshold = style_.collision_threshold;
-    c.warning_threshold = style_.warning_threshold;
-    c.collision_colour = hex(style_.collision_colour);
-    c.warning_colour = hex(style_.warning_colour);
-    c.safe_colour = hex(style_.safe_colour);
-    c.unknown_colour = hex(style_.unknown_colour);
-    c.line_thickness = style_.line_thickness;
-    c.circle_radius = style_.circle_radius;
-    c.marker_size = style_.marker_size;
-    c.draw_hud = style_.draw_hud;
-    c.shaft_length = shaft_length_;
-    c.draw_dvrk = draw_dvrk_;
+    scene_->setStyle(s);
     return;
   }
-  style_ = s;
-  shaft_length_ = c.shaft_length;
-  draw_dvrk_ = c.draw_dvrk;
-}
-
-bool VisualFeedbackNodelet::transformPoint(const std::string& target, const std::string& source,
-                                           const ros::Time& stamp, const cv::Point3d& p, cv::Point3d* out,
-                                           bool* at_stamp, std::string* error) const
-{
-  // No timeout: never blocks the image callback.
-  geometry_msgs::TransformStamped t;
-  *at_stamp = true;
-  try
-  {
-    t = tf_buffer_->lookupTransform(target, source, stamp);
-  }
-  catch (const tf2::TransformException&)
-  {
-    *at_stamp = false;
-    try
-    {
-      t = tf_buffer_->lookupTransform(target, source, ros::Time(0));  // latest available
-    }
-    catch (const tf2::TransformException& e)
-    {
-      *error = e.what();
-      return false;
-    }
-  }
-  tf2::Transform tr;
-  tf2::fromMsg(t.transform, tr);
-  const tf2::Vector3 q = tr * tf2::Vector3(p.x, p.y, p.z);
-  *out = cv::Point3d(q.x(), q.y(), q.z());
-  return true;
+  NODELET_ERROR("dynamic_reconfigure request rejected (%s); keeping collision_threshold %.4f m, warning_threshold "
+                "%.4f m",
+                why.c_str(), current.overlay.collision_threshold, current.overlay.warning_threshold);
+  toConfig(current, &c);  // report the values actually in use back to the client
 }
 
 void VisualFeedbackNodelet::imageCb(const sensor_msgs::ImageConstPtr& image,
                                     const sensor_msgs::CameraInfoConstPtr& info, std::size_t eye_index)
 {
   const auto t0 = std::chrono::steady_clock::now();
-  timespec c0;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
+  const std::uint64_t cpu0 = threadCpuNs();
   Eye& eye = eyes_[eye_index];
   std::lock_guard<std::mutex> eye_lock(eye.mutex);
-  ++eye.received;
-  eye.last_image_ns = static_cast<std::int64_t>(ros::WallTime::now().toNSec());
+  ++eye.stats.received;
+  eye.stats.last_image_ns = static_cast<std::int64_t>(ros::WallTime::now().toNSec());
 
-  std::string why;
-  if (!imageBufferConsistent(*image, &why))
-  {
-    ++eye.rejected;
-    NODELET_ERROR_THROTTLE(1.0, "%s image rejected: %s (%llu rejected so far)", eye.name.c_str(), why.c_str(),
-                           static_cast<unsigned long long>(eye.rejected.load()));
-    return;
-  }
-  if (!eye.info_seen || !sameCalibration(*info, eye.last_info))
-  {
-    eye.last_info = *info;
-    eye.info_seen = true;
-    CameraIntrinsics k;
-    if (intrinsicsFromCameraInfo(*info, &k, &why) && eye.model.configure(k, &why))
-      eye.model_error.clear();
-    else
-    {
-      eye.model = CameraModel();
-      eye.model_error = why;
-    }
-  }
-  if (eye.model.valid() &&
-      (eye.model.intrinsics().width != static_cast<int>(image->width) ||
-       eye.model.intrinsics().height != static_cast<int>(image->height)))
-    why = "camera_info size " + std::to_string(eye.model.intrinsics().width) + "x" +
-          std::to_string(eye.model.intrinsics().height) + " != image size " + std::to_string(image->width) + "x" +
-          std::to_string(image->height);
-  else
-    why = eye.model_error;
-  const bool model_ok = why.empty();
-  if (!model_ok)
-    NODELET_ERROR_THROTTLE(5.0, "%s camera: %s; publishing the image without overlay", eye.name.c_str(), why.c_str());
-
-  // Copy the input (shared and const when zero-copied from the camera nodelet) into an output
-  // buffer from the pool: one memcpy, no allocation in steady state.
-  sensor_msgs::ImagePtr out_msg;
+  sensor_msgs::ImagePtr out;
   cv::Mat canvas;
-  ChannelOrder order = ChannelOrder::kBgr;
-  const std::string& e = image->encoding;
-  const bool direct = e == enc::BGR8 || e == enc::BGRA8 || e == enc::RGB8 || e == enc::RGBA8;
-  try
+  ChannelOrder order;
+  std::string why;
+  if (!prepareCanvas(image, &eye.pool, &out, &canvas, &order, &why))
   {
-    if (direct)
-    {
-      order = (e == enc::RGB8 || e == enc::RGBA8) ? ChannelOrder::kRgb : ChannelOrder::kBgr;
-      out_msg = eye.pool.acquire(image->data.size());
-      out_msg->header = image->header;
-      out_msg->height = image->height;
-      out_msg->width = image->width;
-      out_msg->encoding = image->encoding;
-      out_msg->is_bigendian = image->is_bigendian;
-      out_msg->step = image->step;
-      std::memcpy(out_msg->data.data(), image->data.data(), image->data.size());
-      canvas = cv::Mat(static_cast<int>(image->height), static_cast<int>(image->width),
-                       enc::numChannels(e) == 4 ? CV_8UC4 : CV_8UC3, out_msg->data.data(), image->step);
-    }
-    else
-    {
-      // mono, bayer, 16 bit: converted for colour drawing (allocates; not the endoscope's format).
-      cv_bridge::CvImagePtr converted = cv_bridge::toCvCopy(image, enc::BGR8);
-      out_msg = converted->toImageMsg();
-      canvas = cv::Mat(static_cast<int>(out_msg->height), static_cast<int>(out_msg->width), CV_8UC3,
-                       out_msg->data.data(), out_msg->step);
-    }
-  }
-  catch (const std::exception& ex)
-  {
-    ++eye.rejected;
-    NODELET_ERROR_THROTTLE(1.0, "%s image rejected: cannot convert encoding '%s' (%s)", eye.name.c_str(), e.c_str(),
-                           ex.what());
+    ++eye.stats.rejected;
+    NODELET_ERROR_THROTTLE(1.0, "%s image rejected: %s (%llu rejected so far)", eye.name.c_str(), why.c_str(),
+                           static_cast<unsigned long long>(eye.stats.rejected.load()));
     return;
   }
+  const std::string& off = eye.camera.update(*info, image->width, image->height);
+  if (!off.empty())
+    NODELET_ERROR_THROTTLE(5.0, "%s camera: %s; publishing the image without overlay", eye.name.c_str(), off.c_str());
 
-  // Snapshot of the latched state.
-  const ros::Time now = ros::Time::now();
-  OverlayStyle style;
-  double shaft_length;
-  bool draw_dvrk;
-  std::array<ToolOverlay, kMaxTools> overlays;
-  std::array<PoseLookupResult, kMaxTools> poses;  // status kEmpty: no fresh pose
-  std::size_t n = 0;
   // The tools are drawn where they were when the image was taken: poses interpolated at the image
-  // stamp (an unstamped image gets the newest poses, counted as fallbacks).
-  const std::int64_t image_stamp_ns = image->header.stamp.isZero()
-                                          ? std::numeric_limits<std::int64_t>::max()
-                                          : static_cast<std::int64_t>(image->header.stamp.toNSec());
+  // stamp, transforms looked up at it (an unstamped image gets the newest, counted as fallbacks).
+  const std::int64_t stamp_ns =
+      image->header.stamp.isZero() ? kLatestStamp : static_cast<std::int64_t>(image->header.stamp.toNSec());
+  scene_->snapshot(static_cast<std::int64_t>(ros::Time::now().toNSec()), stamp_ns, &eye.scene);
+  std::array<ToolOverlay, kMaxTools> overlays;
+  FrameReport report;
+  if (off.empty())
   {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    style = style_;
-    shaft_length = shaft_length_;
-    draw_dvrk = draw_dvrk_;
-    const bool distances_fresh = !distances_received_.isZero() && (now - distances_received_).toSec() <= distances_timeout_;
-    for (std::size_t i = 0; i < tools_.size() && n < kMaxTools; ++i)
-    {
-      const Tool& t = tools_[i];
-      if (t.dvrk && !draw_dvrk)
-        continue;
-      ToolOverlay& o = overlays[n];
-      o.label = t.label.c_str();
-      o.distance = (distances_fresh && static_cast<std::size_t>(t.distance_index) < distances_.size())
-                       ? distances_[t.distance_index]
-                       : std::numeric_limits<double>::quiet_NaN();
-      if (std::isinf(o.distance) && o.distance < 0)
-        o.distance = std::numeric_limits<double>::quiet_NaN();
-      const bool pose_fresh = !t.history.empty() && (now - t.pose_received).toSec() <= pose_timeout_;
-      poses[n] = pose_fresh ? t.history.lookup(image_stamp_ns) : PoseLookupResult();
-      if (pose_fresh)
-        eye.pose_frames[n] = t.frame_id;  // string capacity reused: no allocation in steady state
-      ++n;
-    }
+    const std::string& camera_frame = image->header.frame_id.empty() ? info->header.frame_id : image->header.frame_id;
+    placeTools(eye.scene, camera_frame, stamp_ns, static_cast<std::int64_t>(params_.pose_stamp_tolerance * 1e9),
+               *tf_points_, overlays.data(), &report);
   }
-
-  // Tool points in this eye's optical frame.
-  const std::string& camera_frame = image->header.frame_id.empty() ? info->header.frame_id : image->header.frame_id;
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < tools_.size() && k < n; ++i)
-  {
-    const Tool& t = tools_[i];
-    if (t.dvrk && !draw_dvrk)
-      continue;
-    ToolOverlay& o = overlays[k];
-    const PoseLookupResult& pose = poses[k];
-    const std::string& pose_frame = eye.pose_frames[k];
-    ++k;
-    if (pose.status == PoseLookup::kEmpty || !model_ok)
-      continue;
-    const bool pose_at_stamp =
-        pose.status == PoseLookup::kInterpolated ||
-        (pose.status == PoseLookup::kAfterNewest && pose.offset_ns <= static_cast<std::int64_t>(pose_stamp_tolerance_ * 1e9));
-    if (!pose_at_stamp)
-    {
-      ++eye.pose_fallbacks;
-      if (image->header.stamp.isZero())
-        NODELET_WARN_THROTTLE(2.0, "%s image has no stamp: drawing %s at its latest pose (%llu fallbacks)",
-                              eye.name.c_str(), t.name.c_str(),
-                              static_cast<unsigned long long>(eye.pose_fallbacks.load()));
-      else
-        NODELET_WARN_THROTTLE(2.0, "%s image stamp %.3f s is %.3f s %s the buffered poses of %s: drawing its latest "
-                                   "pose (%llu fallbacks; see pose_buffer_size, pose_stamp_tolerance)",
-                              eye.name.c_str(), image->header.stamp.toSec(), pose.offset_ns * 1e-9,
-                              pose.status == PoseLookup::kAfterNewest ? "newer than" : "older than",
-                              t.name.c_str(), static_cast<unsigned long long>(eye.pose_fallbacks.load()));
-    }
-    const cv::Point3d tip_in_pose(pose.pose.position[0], pose.pose.position[1], pose.pose.position[2]);
-    bool at_stamp = true;
-    if (!transformPoint(camera_frame, pose_frame, image->header.stamp, tip_in_pose, &o.tip, &at_stamp, &why))
-    {
-      ++eye.tf_failures;
-      NODELET_ERROR_THROTTLE(2.0, "no transform %s -> %s for %s (%s); the tool is not drawn", pose_frame.c_str(),
-                             camera_frame.c_str(), t.name.c_str(), why.c_str());
-      continue;
-    }
-    if (!at_stamp)
-    {
-      ++eye.tf_fallbacks;
-      NODELET_WARN_THROTTLE(2.0, "no transform %s -> %s at the image stamp %.3f s for %s: latest used (%llu fallbacks)",
-                            pose_frame.c_str(), camera_frame.c_str(), image->header.stamp.toSec(), t.name.c_str(),
-                            static_cast<unsigned long long>(eye.tf_fallbacks.load()));
-    }
-    o.visible = true;
-    cv::Point3d rcm;
-    if (!t.rcm_frame.empty())
-    {
-      // The shaft's far point (towards the trocar) at the image stamp too.
-      if (transformPoint(camera_frame, t.rcm_frame, image->header.stamp, cv::Point3d(0, 0, 0), &rcm, &at_stamp, &why))
-      {
-        if (!at_stamp)
-        {
-          ++eye.tf_fallbacks;
-          NODELET_WARN_THROTTLE(2.0, "no transform %s -> %s at the image stamp %.3f s for %s's shaft: latest used "
-                                     "(%llu fallbacks)",
-                                t.rcm_frame.c_str(), camera_frame.c_str(), image->header.stamp.toSec(),
-                                t.name.c_str(), static_cast<unsigned long long>(eye.tf_fallbacks.load()));
-        }
-        const cv::Point3d d = rcm - o.tip;
-        const double len = std::sqrt(d.dot(d));
-        if (len > 1e-6)
-        {
-          o.shaft = len > shaft_length ? o.tip + (shaft_length / len) * d : rcm;
-          o.has_shaft = true;
-        }
-      }
-      else
-      {
-        ++eye.tf_failures;
-        NODELET_ERROR_THROTTLE(2.0, "no transform %s -> %s for %s's shaft (%s); drawing its tip only",
-                               t.rcm_frame.c_str(), camera_frame.c_str(), t.name.c_str(), why.c_str());
-      }
-    }
-  }
-
-  if (model_ok)
-  {
-    std::array<ToolDrawResult, kMaxTools> results;
-    drawOverlay(canvas, order, eye.model, style, overlays.data(), n, results.data(), nullptr, &eye.hud);
-    // Colour census: frames in which a tool was drawn (shaft or border marker) in each colour.
-    std::array<bool, 4> seen{};
-    for (std::size_t i = 0; i < n; ++i)
-      if (results[i].drawn != ToolDrawn::kNothing)
-        seen[static_cast<std::size_t>(results[i].proximity)] = true;
-    for (std::size_t c = 0; c < seen.size(); ++c)
-      if (seen[c])
-        ++eye.colour_frames[c];
-  }
-  else
-  {
-    const std::string line = "overlay off: " + why.substr(0, 60);
-    CameraModel placeholder;
-    CameraIntrinsics ki;
-    ki.width = canvas.cols;
-    ki.height = canvas.rows;
-    ki.fx = ki.fy = 1.0;
-    placeholder.configure(ki, nullptr);
-    for (std::size_t i = 0; i < n; ++i)
-      overlays[i].visible = false;
-    drawOverlay(canvas, order, placeholder, style, overlays.data(), n, nullptr, line.c_str(), &eye.hud);
-  }
-  if (eye.pub.getNumSubscribers() > 0)
-    eye.pub.publish(sensor_msgs::ImageConstPtr(out_msg));
-  if (eye.compressed_pub.getNumSubscribers() > 0)
-  {
-    cv::Mat bgr = canvas;
-    if (canvas.channels() == 4)
-      cv::cvtColor(canvas, eye.jpeg_bgr, order == ChannelOrder::kRgb ? cv::COLOR_RGBA2BGR : cv::COLOR_BGRA2BGR);
-    else if (order == ChannelOrder::kRgb)
-      cv::cvtColor(canvas, eye.jpeg_bgr, cv::COLOR_RGB2BGR);
-    if (canvas.channels() == 4 || order == ChannelOrder::kRgb)
-      bgr = eye.jpeg_bgr;
-    sensor_msgs::CompressedImagePtr jpeg = boost::make_shared<sensor_msgs::CompressedImage>();
-    jpeg->header = out_msg->header;
-    jpeg->format = out_msg->encoding + "; jpeg compressed bgr8";
-    const std::vector<int> params{cv::IMWRITE_JPEG_QUALITY, jpeg_quality_};
-    if (cv::imencode(".jpg", bgr, jpeg->data, params))
-      eye.compressed_pub.publish(jpeg);
-  }
-  ++eye.published;
-  const auto ns = static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
-  eye.busy_ns += ns;
-  atomicMax(eye.max_busy_ns, ns);
-  timespec c1;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
-  eye.cpu_ns += static_cast<std::uint64_t>((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec));
+  drawFrame(canvas, order, off.empty() ? &eye.camera.projector() : nullptr, off, eye.scene, overlays.data(), &eye.hud,
+            &report);
+  warnFrame(eye, *image, report);
+  eye.stats.record(report);
+  publish(eye, out, canvas, order);
+  eye.stats.addTiming(static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                     std::chrono::steady_clock::now() - t0)
+                                                     .count()),
+                      threadCpuNs() - cpu0);
 }
 
-void VisualFeedbackNodelet::statusTimerCb(const ros::WallTimerEvent& /*event*/)
+void VisualFeedbackNodelet::publish(Eye& eye, const sensor_msgs::ImagePtr& out, const cv::Mat& canvas,
+                                    ChannelOrder order)
 {
+  // image_transport publishes raw and, when installed, its plugins (compressed, theora, ...)
+  // to their subscribers only.
+  if (eye.pub.getNumSubscribers() > 0)
+    eye.pub.publish(sensor_msgs::ImageConstPtr(out));
+  if (eye.jpeg_pub && eye.jpeg_pub.getNumSubscribers() > 0)
+  {
+    sensor_msgs::CompressedImagePtr jpeg = boost::make_shared<sensor_msgs::CompressedImage>();
+    jpeg->header = out->header;
+    if (encodeJpeg(canvas, order, out->encoding, params_.jpeg_quality, &eye.jpeg_bgr, jpeg.get()))
+      eye.jpeg_pub.publish(jpeg);
+  }
+}
+
+void VisualFeedbackNodelet::warnFrame(const Eye& eye, const sensor_msgs::Image& image, const FrameReport& report) const
+{
+  for (std::size_t i = 0; i < report.n; ++i)
+  {
+    const ToolPlacement& p = report.tools[i];
+    const ToolSample& s = eye.scene.tools[i];
+    const char* name = s.tool->name.c_str();
+    if (p.pose_fallback)
+      NODELET_WARN_THROTTLE(2.0, "%s image stamp %.3f s: %s drawn at its latest pose, %.3f s away (%llu fallbacks; "
+                                 "see pose_buffer_size, pose_stamp_tolerance)",
+                            eye.name.c_str(), image.header.stamp.toSec(), name, s.pose.offset_ns * 1e-9,
+                            static_cast<unsigned long long>(eye.stats.pose_fallbacks.load()));
+    if (p.tip_failed || p.shaft_failed)
+      NODELET_ERROR_THROTTLE(2.0, "no transform to %s for %s%s (%s)", image.header.frame_id.c_str(), name,
+                             p.tip_failed ? ": not drawn" : "'s shaft: tip only", p.error.c_str());
+    if (p.transform_fallbacks > 0)
+      NODELET_WARN_THROTTLE(2.0, "no transform at the image stamp %.3f s for %s: latest used (%llu fallbacks)",
+                            image.header.stamp.toSec(), name,
+                            static_cast<unsigned long long>(eye.stats.tf_fallbacks.load()));
+  }
+}
+
+void VisualFeedbackNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  using diagnostic_msgs::DiagnosticStatus;
   const ros::WallTime now = ros::WallTime::now();
-  saras_msgs::ComponentStatus msg;
-  msg.component = component_;
-  std::uint64_t received = 0, rejected = 0, tf_failures = 0, fallbacks = 0;
-  std::array<std::uint64_t, 4> colours{};
+  const double period = std::max(1e-3, (now - last_report_).toSec());
+  last_report_ = now;
   std::int64_t last_ns = 0;
+  std::uint64_t problems = 0;
+  std::array<std::uint64_t, 4> colours{};
   bool subscribed = false;
-  std::string model_errors;
+  for (Eye& e : eyes_)
+  {
+    const EyeStats& s = e.stats;
+    const std::uint64_t pub = s.published;
+    stat.addf(e.name + " frames in", "%llu", static_cast<unsigned long long>(s.received.load()));
+    stat.addf(e.name + " frames out", "%llu", static_cast<unsigned long long>(pub));
+    stat.addf(e.name + " output rate [Hz]", "%.1f", (pub - e.published_reported) / period);
+    stat.addf(e.name + " rejected images", "%llu", static_cast<unsigned long long>(s.rejected.load()));
+    stat.addf(e.name + " mean processing [ms]", "%.3f", pub > 0 ? s.busy_ns.load() / 1e6 / pub : 0.0);
+    stat.addf(e.name + " max processing [ms]", "%.3f", s.max_busy_ns.load() / 1e6);
+    stat.addf(e.name + " mean CPU [ms]", "%.3f", pub > 0 ? s.cpu_ns.load() / 1e6 / pub : 0.0);
+    e.published_reported = pub;
+    for (std::size_t c = 0; c < colours.size(); ++c)
+      colours[c] += s.colour_frames[c];
+    problems += s.tf_failures + s.pose_fallbacks + s.tf_fallbacks;
+    last_ns = std::max(last_ns, s.last_image_ns.load());
+    subscribed = subscribed || e.pub.getNumSubscribers() > 0 || e.jpeg_pub.getNumSubscribers() > 0;
+  }
+  const char* names[4] = {"grey", "green", "yellow", "red"};  // indexed by Proximity
+  for (std::size_t c = 0; c < colours.size(); ++c)
+    stat.addf(std::string("frames with a ") + names[c] + " tool", "%llu", static_cast<unsigned long long>(colours[c]));
+  std::uint64_t tf_failures = 0, pose_fallbacks = 0, tf_fallbacks = 0;
   for (const Eye& e : eyes_)
   {
-    received += e.received;
-    rejected += e.rejected;
-    tf_failures += e.tf_failures;
-    fallbacks += e.pose_fallbacks + e.tf_fallbacks;
-    for (std::size_t c = 0; c < colours.size(); ++c)
-      colours[c] += e.colour_frames[c];
-    last_ns = std::max(last_ns, e.last_image_ns.load());
-    subscribed = subscribed || e.pub.getNumSubscribers() > 0 || e.compressed_pub.getNumSubscribers() > 0;
+    tf_failures += e.stats.tf_failures;
+    pose_fallbacks += e.stats.pose_fallbacks;
+    tf_fallbacks += e.stats.tf_fallbacks;
   }
-  {
-    std::lock_guard<std::mutex> lock(state_mutex_);
-    rejected += distances_rejected_;
-    for (const Tool& t : tools_)
-      rejected += t.rejected;
-  }
-  msg.received = received;
-  msg.rejected = rejected;
-  msg.input_age = last_ns > 0 ? (now.toNSec() - last_ns) * 1e-9 : std::numeric_limits<double>::infinity();
-  std::ostringstream text;
+  stat.addf("missing transforms", "%llu", static_cast<unsigned long long>(tf_failures));
+  stat.addf("poses not at the image stamp", "%llu", static_cast<unsigned long long>(pose_fallbacks));
+  stat.addf("transforms not at the image stamp", "%llu", static_cast<unsigned long long>(tf_fallbacks));
+  const SceneCounters sc = scene_->counters();
+  stat.addf("rejected poses", "%llu", static_cast<unsigned long long>(sc.rejected_poses));
+  stat.addf("rejected distance arrays", "%llu", static_cast<unsigned long long>(sc.rejected_distances));
+  stat.addf("pose history restarts", "%llu", static_cast<unsigned long long>(sc.history_restarts));
+  stat.add("compressed stream", own_jpeg_ ? "visual_feedback" : "image_transport");
+  const double age = last_ns > 0 ? (now.toNSec() - last_ns) * 1e-9 : std::numeric_limits<double>::infinity();
+  stat.addf("image age [s]", "%.3f", age);
   if (!subscribed)
-  {
-    msg.level = saras_msgs::ComponentStatus::OK;
-    text << "idle: no subscribers to the augmented images";
-  }
-  else if (!(msg.input_age <= image_timeout_))
-  {
-    msg.level = saras_msgs::ComponentStatus::STALE;
-    text << "no endoscope image for " << (std::isfinite(msg.input_age) ? msg.input_age : -1.0) << " s";
-  }
+    stat.summary(DiagnosticStatus::OK, "idle: no subscribers to the augmented images");
+  else if (!(age <= params_.image_timeout))
+    stat.summaryf(DiagnosticStatus::STALE, "no endoscope image for %.1f s", std::isfinite(age) ? age : -1.0);
+  else if (problems > problems_reported_)
+    stat.summaryf(DiagnosticStatus::WARN, "%llu missing transforms or poses/transforms not at the image stamp in "
+                                          "the last period",
+                  static_cast<unsigned long long>(problems - problems_reported_));
   else
-  {
-    msg.level = saras_msgs::ComponentStatus::OK;
-    for (const Eye& e : eyes_)
-    {
-      const std::uint64_t pub = e.published;
-      text << e.name << ": " << e.received.load() << " in, " << pub << " out";
-      if (pub > 0)
-        text << ", mean " << (e.busy_ns.load() / 1e6 / static_cast<double>(pub))
-             << " ms, max " << e.max_busy_ns.load() / 1e6 << " ms, cpu mean "
-             << (e.cpu_ns.load() / 1e6 / static_cast<double>(pub)) << " ms; ";
-      else
-        text << "; ";
-    }
-    text << "frames per colour (both eyes): red " << colours[static_cast<int>(Proximity::kCollision)] << ", yellow "
-         << colours[static_cast<int>(Proximity::kWarning)] << ", green " << colours[static_cast<int>(Proximity::kSafe)]
-         << ", grey " << colours[static_cast<int>(Proximity::kUnknown)] << "; ";
-    if (tf_failures > tf_failures_reported_)
-    {
-      msg.level = saras_msgs::ComponentStatus::WARN;
-      text << (tf_failures - tf_failures_reported_) << " missing transforms in the last period; ";
-    }
-    if (fallbacks > fallbacks_reported_)
-    {
-      msg.level = saras_msgs::ComponentStatus::WARN;
-      text << (fallbacks - fallbacks_reported_) << " poses/transforms not at the image stamp (latest used) in the "
-           << "last period; ";
-    }
-  }
-  msg.message = text.str();
-  if (msg.level != last_level_ || (now - last_status_).toSec() >= 1.0)
-  {
-    msg.header.stamp = ros::Time::now();
-    status_pub_.publish(msg);
-    last_level_ = msg.level;
-    last_status_ = now;
-    tf_failures_reported_ = tf_failures;
-    fallbacks_reported_ = fallbacks;
-  }
+    stat.summary(DiagnosticStatus::OK, "augmenting");
+  problems_reported_ = problems;
 }
 
 }  // namespace saras_visual_feedback

@@ -73,7 +73,7 @@ protected:
     ASSERT_TRUE(camera.configure(distortedCamera(), nullptr));
     image = cv::Mat(720, 1280, CV_8UC3, cv::Scalar(0, 0, 0));
   }
-  CameraModel camera;
+  RawProjector camera;
   cv::Mat image;
 };
 }  // namespace
@@ -302,7 +302,7 @@ TEST_F(OverlayTest, RejectsUnsupportedImages)
   cv::Mat mono(720, 1280, CV_8UC1, cv::Scalar(0));
   ToolOverlay tool;
   EXPECT_FALSE(drawOverlay(mono, ChannelOrder::kBgr, camera, noHud(), &tool, 1, nullptr));
-  CameraModel unconfigured;
+  RawProjector unconfigured;
   EXPECT_FALSE(drawOverlay(image, ChannelOrder::kBgr, unconfigured, noHud(), &tool, 1, nullptr));
 }
 

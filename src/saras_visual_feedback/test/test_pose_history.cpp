@@ -199,7 +199,7 @@ TEST(PoseHistory, DrawnTipOfALateImageIsThePoseAtTheImageStamp)
   k.cy = 178.2;
   k.model = DistortionModel::kPlumbBob;
   k.d = {-0.2, 0.05, 0.001, -0.0005, 0.0, 0, 0, 0};
-  CameraModel camera;
+  RawProjector camera;
   ASSERT_TRUE(camera.configure(k, nullptr));
   // Tip in the optical frame: x = 0.02 sin(2 pi t) [m] at 0.15 m depth, poses at 250 Hz.
   auto tip = [](std::int64_t t) { return cv::Point3d(0.02 * std::sin(2 * M_PI * t * 1e-9), 0.005, 0.15); };

@@ -82,14 +82,39 @@ TEST(CameraInfo, RejectsUncalibratedAndMalformed)
   EXPECT_FALSE(intrinsicsFromCameraInfo(i, &k, &why));
 }
 
-TEST(CameraInfo, SameCalibrationIgnoresStamps)
+TEST(CameraInfo, RawProjectionMatchesImageGeometry)
 {
-  sensor_msgs::CameraInfo a = info(), b = info();
-  b.header.stamp = ros::Time(5.0);
-  b.header.seq = 12;
-  EXPECT_TRUE(sameCalibration(a, b));
-  b.K[0] = 1051.0;
-  EXPECT_FALSE(sameCalibration(a, b));
+  // A monocular camera (R = I, P = [K|0]): image_geometry's rectified projection followed by
+  // unrectifyPoint is the raw-image projection the overlay draws with.
+  sensor_msgs::CameraInfo i = info();
+  i.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  i.P = {1050.0, 0, 652.3, 0, 0, 1042.5, 371.9, 0, 0, 0, 1, 0};
+  image_geometry::PinholeCameraModel model;
+  model.fromCameraInfo(i);
+  CameraIntrinsics k;
+  ASSERT_TRUE(intrinsicsFromCameraModel(model, &k, nullptr));
+  RawProjector projector;
+  ASSERT_TRUE(projector.configure(k, nullptr));
+  for (const cv::Point3d& p : {cv::Point3d(0.01, -0.02, 0.1), cv::Point3d(-0.03, 0.01, 0.08), cv::Point3d(0, 0, 0.2)})
+  {
+    const Projection got = projector.project(p);
+    ASSERT_TRUE(got.in_image);
+    const cv::Point2d ref = model.unrectifyPoint(model.project3dToPixel(p));
+    EXPECT_NEAR(got.pixel.x, ref.x, 1e-6);
+    EXPECT_NEAR(got.pixel.y, ref.y, 1e-6);
+  }
+}
+
+TEST(CameraInfo, EyeCameraRebuildsOnChangeAndChecksSize)
+{
+  EyeCamera eye;
+  EXPECT_EQ(eye.update(info(), 1280, 720), "");
+  EXPECT_NE(eye.update(info(), 640, 360).find("size"), std::string::npos);
+  sensor_msgs::CameraInfo i = info();
+  i.K[0] = 0.0;  // recalibrated to garbage: overlay off
+  EXPECT_NE(eye.update(i, 1280, 720).find("focal"), std::string::npos);
+  EXPECT_EQ(eye.update(info(), 1280, 720), "");
+  EXPECT_DOUBLE_EQ(eye.projector().intrinsics().fx, 1050.0);
 }
 
 TEST(ImageBuffer, DetectsInconsistentBuffers)

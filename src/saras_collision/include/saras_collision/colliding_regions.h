@@ -6,7 +6,8 @@
  * world -> bones_marker_frame, tool base frames and trocar (RCM) frames, looked up every cycle
  * (so calibration updates and robot_state_publisher changes are followed).
  * Outputs: /collision/distances, /collision/report, /collision/markers, optional
- * /collision/<tool>/fixture_wrench, heartbeat on /saras/status. See README.md for parameters.
+ * /collision/<tool>/fixture_wrench, health on /diagnostics (hardware_id "collision": cycle rate,
+ * input staleness, rejected inputs, closest distance). See README.md for parameters.
  */
 #ifndef SARAS_COLLISION_COLLIDING_REGIONS_H
 #define SARAS_COLLISION_COLLIDING_REGIONS_H
@@ -16,11 +17,12 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 #include <saras_msgs/CollisionReport.h>
-#include <saras_msgs/ComponentStatus.h>
 #include <std_msgs/Float64MultiArray.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
@@ -39,10 +41,9 @@ struct CollidingRegionsConfig
   double vertex_tolerance = 1e-6;  ///< relative box tolerance
   double collision_threshold = 0.005;  ///< [m]
   double warning_threshold = 0.02;  ///< [m]
-  double tf_timeout = 3.0;  ///< start-up grace before missing TF is an error [s]
+  double tf_timeout = 3.0;  ///< start-up grace before a missing TF frame or pose is an error [s]
   double pose_timeout = 0.5;  ///< a tool pose older than this is stale (no data) [s]
   double marker_rate = 10.0;  ///< marker publication rate [Hz] (<= rate)
-  double status_rate = 1.0;  ///< heartbeat rate [Hz]
   std::string world_frame = "world";
   std::string bones_frame = "bones_marker_frame";
   bool fixture_enabled = false;
@@ -89,14 +90,22 @@ private:
 
   void poseCallback(std::size_t i, const geometry_msgs::PoseStampedConstPtr& msg);
   void cycle(const ros::SteadyTimerEvent& event);
-  void statusTimer(const ros::SteadyTimerEvent& event);
   /// world_T_frame at the latest time; false (with throttled log) if unavailable.
   bool lookup(const std::string& frame, Eigen::Isometry3d& world_T_frame);
   void updateBones();
   void publishMarkers(const ros::Time& now);
-  void publishStatus(const ros::Time& now);
-  /// Health level; the human-readable reason is built only if @p message is not null.
+  /// Box markers of the forbidden regions into markers_msg_ from index 0. @return their number
+  std::size_t fillBoxMarkers(const ros::Time& now);
+  /**
+   * Health level (diagnostic_msgs/DiagnosticStatus OK .. STALE) of the inputs: OK when the
+   * forbidden regions are placed and every tool has a current pose; WARN while something is
+   * missing within the start-up grace (~tf_timeout); after it ERROR when a tool or the
+   * forbidden regions are not monitored, STALE when no tool has a current pose (the node runs
+   * but monitors nothing). The reason is built only if @p message is not null.
+   */
   uint8_t computeLevel(std::string* message) const;
+  /// diagnostic_updater task "inputs": computeLevel() plus the counters and ages.
+  void inputsDiagnostic(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ros::NodeHandle nh_;
   CollidingRegionsConfig config_;
@@ -109,8 +118,11 @@ private:
   Eigen::Isometry3d world_T_bones_ = Eigen::Isometry3d::Identity();
   bool have_bones_ = false;
   std::vector<ToolState> tools_;
-  ros::Publisher distances_pub_, report_pub_, markers_pub_, status_pub_;
-  ros::SteadyTimer cycle_timer_, status_timer_;
+  ros::Publisher distances_pub_, report_pub_, markers_pub_;
+  ros::SteadyTimer cycle_timer_;
+  diagnostic_updater::Updater updater_;
+  double min_rate_ = 0.0, max_rate_ = 0.0;  ///< bounds of the cycle-rate diagnostic [Hz]
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> cycle_rate_;
   std_msgs::Float64MultiArray distances_msg_;
   saras_msgs::CollisionReport report_msg_;
   visualization_msgs::MarkerArray markers_msg_;

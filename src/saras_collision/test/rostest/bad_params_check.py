@@ -26,13 +26,13 @@ class BadParams(unittest.TestCase):
         self.assertIn(expected, out)
 
     def test_negative_rate(self):
-        self.check("bad_rate", "parameter ~rate", "_rate:=-1.0", "_vertices_file:=" + PKG + "/config/pelvis_vertices.txt")
+        self.check("bad_rate", "parameter /bad_rate/rate = -1 [Hz] is invalid", "_rate:=-1.0", "_vertices_file:=" + PKG + "/config/pelvis_vertices.txt")
 
     def test_missing_vertices_file_param(self):
-        self.check("no_file", "parameter ~vertices_file")
+        self.check("no_file", "parameter /no_file/vertices_file")
 
     def test_thresholds_order(self):
-        self.check("bad_thresholds", "parameter ~thresholds/warning", "_thresholds/warning:=0.001",
+        self.check("bad_thresholds", "parameter /bad_thresholds/thresholds/warning", "_thresholds/warning:=0.001",
                    "_vertices_file:=" + PKG + "/config/pelvis_vertices.txt")
 
     def test_malformed_file_names_the_line(self):

@@ -3,9 +3,9 @@
 
 Publishes tool-tip poses (SARAS tips in mesa_<side>/sbs_world, PSM tips in PSM<n>), leaves PSM2
 without data, and checks /collision/distances, /collision/report, /collision/markers, the
-virtual-fixture wrench, the /saras/status heartbeat and a moved bone marker against references computed here from
-the known scene geometry (exact convex minimisation by ternary search, independent of the C++
-library).
+virtual-fixture wrench, the health on /diagnostics and a moved bone marker against references
+computed here from the known scene geometry (exact convex minimisation by ternary search,
+independent of the C++ library).
 """
 import math
 import unittest
@@ -15,7 +15,8 @@ import rospy
 import tf2_ros
 import rostest
 from geometry_msgs.msg import PoseStamped, TransformStamped, WrenchStamped
-from saras_msgs.msg import CollisionReport, ComponentStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from saras_msgs.msg import CollisionReport
 from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import MarkerArray
 
@@ -80,12 +81,13 @@ class SceneCheck(unittest.TestCase):
         self.report = None
         self.markers = None
         self.wrench = None
-        self.status = []
+        self.inputs = []  # "colliding_regions: inputs" statuses from /diagnostics
+        self.rate_status = []  # "colliding_regions: cycle rate"
         rospy.Subscriber("/collision/distances", Float64MultiArray, lambda m: setattr(self, "distances", m))
         rospy.Subscriber("/collision/report", CollisionReport, lambda m: setattr(self, "report", m))
         rospy.Subscriber("/collision/markers", MarkerArray, lambda m: setattr(self, "markers", m))
         rospy.Subscriber("/collision/mesa_left/fixture_wrench", WrenchStamped, lambda m: setattr(self, "wrench", m))
-        rospy.Subscriber("/saras/status", ComponentStatus, self.status.append)
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self.on_diagnostics)
         self.pubs = {
             "mesa_left": rospy.Publisher("/mesa_left/ee_pose", PoseStamped, queue_size=1),
             "mesa_right": rospy.Publisher("/mesa_right/ee_pose", PoseStamped, queue_size=1),
@@ -94,6 +96,27 @@ class SceneCheck(unittest.TestCase):
         }
         self.frames = {"mesa_left": "mesa_left/sbs_world", "mesa_right": "mesa_right/sbs_world",
                        "PSM1": "PSM1", "PSM2": "PSM2"}
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name.endswith("colliding_regions: inputs"):
+                self.inputs.append(status)
+            elif status.name.endswith("colliding_regions: cycle rate"):
+                self.rate_status.append(status)
+
+    def wait_inputs_status(self, predicate, timeout, publishing=False):
+        """The first new inputs status satisfying @p predicate within @p timeout [s], else None."""
+        self.inputs[:] = []
+        end = rospy.Time.now() + rospy.Duration(timeout)
+        while rospy.Time.now() < end and not rospy.is_shutdown():
+            if publishing:
+                self.spin_publishing(0.1)
+            else:
+                rospy.sleep(0.1)
+            for status in list(self.inputs):
+                if predicate(status):
+                    return status
+        return None
 
     def publish(self, name, local):
         msg = PoseStamped()
@@ -114,7 +137,16 @@ class SceneCheck(unittest.TestCase):
             rate.sleep()
 
     def test_scene(self):
+        """One scenario in phases (each phase starts from the state the previous one left)."""
         self.spin_publishing(3.0)
+        d = self.check_distances_fixture_markers()
+        self.check_health(d)
+        self.check_nan_rejected()
+        self.check_moved_bones()
+        self.check_inputs_stop()
+
+    def check_distances_fixture_markers(self):
+        """Distances, report, fixture wrench and markers against the references. @return the distances"""
         # Snapshot: the references below take time and the inputs go stale meanwhile.
         distances, report, wrench, markers = self.distances, self.report, self.wrench, self.markers
         self.assertIsNotNone(distances, "no /collision/distances")
@@ -158,22 +190,33 @@ class SceneCheck(unittest.TestCase):
         bone = [m for m in markers.markers if m.ns == "bones"][0]
         self.assertAlmostEqual(bone.pose.position.x, -0.035, delta=1e-9)
         self.assertAlmostEqual(bone.pose.position.z, 0.118, delta=1e-9)
-        # Heartbeat: PSM2 missing -> WARN naming it.
-        mine = [s for s in self.status if s.component == "colliding_regions"]
-        self.assertTrue(mine, "no heartbeat")
-        self.assertEqual(mine[-1].level, ComponentStatus.WARN)
-        self.assertIn("PSM2", mine[-1].message)
+        return d
 
-        # NaN poses for PSM2 are rejected and counted; the node keeps running.
+    def check_health(self, d):
+        """Health: PSM2 missing -> ERROR naming it once the start-up grace (tf_timeout 3 s) is over."""
+        status = self.wait_inputs_status(
+            lambda s: s.level == DiagnosticStatus.ERROR and "lost for: PSM2" in s.message, 6.0, publishing=True)
+        self.assertIsNotNone(status, "no ERROR inputs status naming only the missing PSM2 on /diagnostics")
+        self.assertEqual(status.hardware_id, "collision")
+        values = {kv.key: kv.value for kv in status.values}
+        self.assertEqual(values["PSM2 pose age [s]"], "no pose received")
+        closest = min(range(3), key=lambda i: d[i])
+        self.assertEqual(values["closest tool"], ORDER[closest])
+        self.assertAlmostEqual(float(values["closest distance [m]"]), d[closest], delta=1e-6)
+        self.assertTrue(self.rate_status, "no cycle rate status on /diagnostics")
+        self.assertEqual(self.rate_status[-1].hardware_id, "collision")
+
+    def check_nan_rejected(self):
+        """NaN poses for PSM2 are rejected and counted; the node keeps running."""
         self.spin_publishing(1.5, nan_psm2=True)
         self.assertTrue(math.isnan(self.distances.data[3]))
         self.assertAlmostEqual(self.distances.data[0], 0.0075, delta=1e-9)
-        self.status[:] = []
-        rospy.sleep(1.2)
-        mine = [s for s in self.status if s.component == "colliding_regions"]
-        self.assertTrue(mine)
-        self.assertGreater(mine[-1].rejected, 0)
+        status = self.wait_inputs_status(lambda s: True, 3.0, publishing=True)
+        self.assertIsNotNone(status, "no inputs status on /diagnostics")
+        self.assertGreater(int({kv.key: kv.value for kv in status.values}["poses rejected (non-finite)"]), 0)
 
+    def check_moved_bones(self):
+        """The bone marker moves: the node follows it without restart."""
         # The bone marker moves 10 mm towards the feet (new static TF): the node follows it without
         # restart; mesa_left is now 17.5 mm from the bone and the fixture force is 200 * 2.5 mm.
         t = TransformStamped()
@@ -189,11 +232,17 @@ class SceneCheck(unittest.TestCase):
         self.assertEqual(self.report.tools[0].nearest_object, "bone_0")
         self.assertAlmostEqual(self.wrench.wrench.force.y, 0.5, delta=1e-9)
 
+    def check_inputs_stop(self):
+        """Inputs stop: every tool stale, the fixture releases, the health says STALE."""
         # Inputs stop: after ~pose_timeout every tool is stale (NaN) and the fixture releases.
         rospy.sleep(1.0)
         self.assertTrue(all(math.isnan(x) for x in self.distances.data), self.distances.data)
         f = self.wrench.wrench.force
         self.assertEqual((f.x, f.y, f.z), (0.0, 0.0, 0.0))
+        # ... and the health says so: STALE, nothing monitored.
+        status = self.wait_inputs_status(lambda s: s.level == DiagnosticStatus.STALE, 3.0)
+        self.assertIsNotNone(status, "inputs status not STALE with every tool pose stale")
+        self.assertIn("nothing monitored", status.message)
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "saras_visual_feedback/camera_model.h"
+#include "saras_visual_feedback/raw_projector.h"
 
 namespace saras_visual_feedback
 {
@@ -98,6 +98,9 @@ struct ToolDrawResult
   cv::Point2d marker_pixel;  ///< marker centre [px] (kBorderMarker)
 };
 
+/// Largest OverlayStyle::shaft_segments.
+constexpr int kMaxShaftSegments = 64;
+
 /// Maximum number of tools drawn per image (2 SARAS tools + 2 da Vinci tools).
 constexpr std::size_t kMaxTools = 4;
 
@@ -170,7 +173,7 @@ private:
  * @param status_line optional text drawn under the HUD (e.g. a warning), nullptr for none
  * @param hud      optional cache of the HUD text (nullptr: rendered directly)
  */
-bool drawOverlay(cv::Mat& image, ChannelOrder order, const CameraModel& camera, const OverlayStyle& style,
+bool drawOverlay(cv::Mat& image, ChannelOrder order, const RawProjector& camera, const OverlayStyle& style,
                  const ToolOverlay* tools, std::size_t n, ToolDrawResult* results,
                  const char* status_line = nullptr, HudCache* hud = nullptr);
 

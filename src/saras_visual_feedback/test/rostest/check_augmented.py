@@ -7,7 +7,7 @@
   rate       only the rate part of nominal (used with the real saras_simulation/endoscope_sim)
   reconfigure  dynamic_reconfigure changes thresholds/colours live and refuses invalid requests
   bad_input  malformed images, NaN poses and short distance arrays: the nodelet keeps publishing
-             and its heartbeat counts the rejections
+             and /diagnostics counts the rejections
   lazy       no camera/pose subscription while nobody listens; subscribes per eye on demand
 """
 import math
@@ -22,7 +22,7 @@ import numpy as np
 import rosgraph
 import rospy
 import rostest
-from saras_msgs.msg import ComponentStatus
+from diagnostics import DiagnosticsRecorder
 from sensor_msgs.msg import CompressedImage, Image
 
 import scene
@@ -87,23 +87,20 @@ class TestVisualFeedback(unittest.TestCase):
         getattr(self, 'scenario_' + self.mode)()
 
     def scenario_nominal(self):
-        statuses = []
-        rospy.Subscriber('/saras/status', ComponentStatus, statuses.append, queue_size=50)
+        diagnostics = DiagnosticsRecorder('visual_feedback')
         outs = self.check_rate()
         self.check_drawing(outs)
-        self.check_colour_census(statuses)
+        self.check_colour_census(diagnostics)
         self.check_compressed()
 
-    def check_colour_census(self, statuses):
-        """The heartbeat counts the frames drawn in each colour: the scene has all three."""
-        vf = [s for s in statuses if s.component.endswith('visual_feedback') and 'frames per colour' in s.message]
-        self.assertTrue(vf, 'no heartbeat with the colour census')
-        m = re.search(r'red (\d+), yellow (\d+), green (\d+), grey (\d+)', vf[-1].message)
-        self.assertIsNotNone(m, vf[-1].message)
-        red, yellow, green, _ = (int(g) for g in m.groups())
-        # Every output frame has each colour once (both eyes): at least the frames seen so far.
+    def check_colour_census(self, diagnostics):
+        """/diagnostics counts the frames drawn in each colour: the scene has all three."""
         n = sum(o.count for o in self.last_outs.values())
-        rospy.loginfo('colour census: %s (%d frames received)', m.group(0), n)
+        self.assertTrue(wait_for(lambda: diagnostics.statuses, 5.0), 'no visual_feedback status on /diagnostics')
+        values = DiagnosticsRecorder.values(diagnostics.statuses[-1])
+        red, yellow, green = (int(values['frames with a %s tool' % c]) for c in ('red', 'yellow', 'green'))
+        # Every output frame has each colour once (both eyes): at least the frames seen so far.
+        rospy.loginfo('colour census: red %d, yellow %d, green %d (%d frames received)', red, yellow, green, n)
         for colour, count in (('red', red), ('yellow', yellow), ('green', green)):
             self.assertGreater(count, 0.5 * n, '%s drawn in %d frames only (%d received)' % (colour, count, n))
 
@@ -214,8 +211,7 @@ class TestVisualFeedback(unittest.TestCase):
         self.assertEqual(colour_at('mesa_right'), (255, 0, 255))
 
     def scenario_bad_input(self):
-        statuses = []
-        rospy.Subscriber('/saras/status', ComponentStatus, lambda m: statuses.append(m), queue_size=50)
+        diagnostics = DiagnosticsRecorder('visual_feedback')
         outs = {e: Recorder('/visual_feedback/%s/image' % e) for e in EYES}
         self.assertTrue(wait_for(lambda: all(o.count > 5 for o in outs.values()), 20.0), 'no augmented images')
         ins = {e: Recorder('/endoscope/%s/image_raw' % e) for e in EYES}
@@ -229,10 +225,13 @@ class TestVisualFeedback(unittest.TestCase):
             # One image in five is truncated and rejected; the others come out.
             self.assertGreater(n_out, 0.7 * n_in)
             self.assertLess(n_out, 0.9 * n_in + 2)
-        vf = [s for s in statuses if s.component.endswith('visual_feedback')]
-        self.assertTrue(vf, 'no heartbeat from visual_feedback on /saras/status')
-        self.assertGreater(vf[-1].rejected, 10)
-        self.assertGreater(vf[-1].received, vf[-1].rejected)
+        self.assertTrue(diagnostics.statuses, 'no visual_feedback status on /diagnostics')
+        values = DiagnosticsRecorder.values(diagnostics.statuses[-1])
+        rejected = sum(int(values[k]) for k in ('left rejected images', 'right rejected images',
+                                                'rejected poses', 'rejected distance arrays'))
+        received = int(values['left frames in']) + int(values['right frames in'])
+        self.assertGreater(rejected, 10)
+        self.assertGreater(received, rejected)
         # Still alive and drawing after all that.
         n = outs['left'].count
         self.assertTrue(wait_for(lambda: outs['left'].count > n + 10, 5.0))

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """rostest checker: a bad start-up parameter makes the node exit non-zero naming the parameter
-(contact_forces and the standalone VisualFeedback node), a good one keeps it running."""
+(contact_forces and VisualFeedback under `nodelet standalone`), a good one keeps it running."""
 import os
 import subprocess
 import sys
@@ -11,8 +11,12 @@ import rostest
 
 
 def run(executable, args, timeout=15.0):
-    """Runs a node of this package; returns (exit code or None if still running, output)."""
-    cmd = ['rosrun', 'saras_visual_feedback', executable] + args
+    """Runs a node of this package ('visual_feedback': the nodelet through `nodelet standalone`);
+    returns (exit code or None if still running, output)."""
+    if executable == 'visual_feedback':
+        cmd = ['rosrun', 'nodelet', 'nodelet', 'standalone', 'saras_visual_feedback/VisualFeedback'] + args
+    else:
+        cmd = ['rosrun', 'saras_visual_feedback', executable] + args
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=os.environ.copy())
     try:
         out, _ = p.communicate(timeout=timeout)
@@ -45,24 +49,24 @@ class TestBadParams(unittest.TestCase):
         self.assertIsNone(code, 'node exited with valid parameters')
 
     def test_visual_feedback_rejects_bad_thresholds(self):
-        code, out = run('visual_feedback_node', ['__name:=vf_bad', '_collision_threshold:=0.03',
+        code, out = run('visual_feedback', ['__name:=vf_bad', '_collision_threshold:=0.03',
                                                  '_warning_threshold:=0.02'])
         self.assertIsNotNone(code, 'node kept running with warning_threshold < collision_threshold')
         self.assertNotEqual(code, 0)
         self.assertIn('warning_threshold', out)
 
     def test_visual_feedback_rejects_bad_colour(self):
-        code, out = run('visual_feedback_node', ['__name:=vf_bad_colour', '_safe_colour:=green'])
+        code, out = run('visual_feedback', ['__name:=vf_bad_colour', '_safe_colour:=green'])
         self.assertNotEqual(code, 0)
         self.assertIsNotNone(code)
         self.assertIn('safe_colour', out)
 
     def test_visual_feedback_rejects_bad_pose_history(self):
-        code, out = run('visual_feedback_node', ['__name:=vf_bad_history', '_pose_buffer_size:=1'])
+        code, out = run('visual_feedback', ['__name:=vf_bad_history', '_pose_buffer_size:=1'])
         self.assertIsNotNone(code, 'node kept running with pose_buffer_size = 1')
         self.assertNotEqual(code, 0)
         self.assertIn('pose_buffer_size', out)
-        code, out = run('visual_feedback_node', ['__name:=vf_bad_tolerance', '_pose_stamp_tolerance:=-0.1'])
+        code, out = run('visual_feedback', ['__name:=vf_bad_tolerance', '_pose_stamp_tolerance:=-0.1'])
         self.assertIsNotNone(code, 'node kept running with pose_stamp_tolerance < 0')
         self.assertNotEqual(code, 0)
         self.assertIn('pose_stamp_tolerance', out)

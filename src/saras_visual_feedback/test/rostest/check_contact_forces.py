@@ -4,7 +4,7 @@
 Publishes contacts on /mesa_left/contact only and checks both sides' contact_force: the value
 depth*K_skin*direction/|direction| at 60 Hz, zero for the side without contact, zero once the
 contact is stale, and NaN / zero-length / negative-depth contacts rejected (no NaN force, the node
-keeps publishing, its heartbeat counts them).
+keeps publishing, /diagnostics counts them).
 """
 import math
 import sys
@@ -15,7 +15,8 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Twist, Vector3
-from saras_msgs.msg import ComponentStatus, Contact
+from saras_msgs.msg import Contact
+from diagnostics import DiagnosticStatus, DiagnosticsRecorder
 
 K_SKIN = 500.0  # config/contact_forces.yaml
 
@@ -42,8 +43,7 @@ def contact(depth, x, y, z):
 class TestContactForces(unittest.TestCase):
     def test_contact_forces(self):
         pub = rospy.Publisher('/mesa_left/contact', Contact, queue_size=10)
-        statuses = []
-        rospy.Subscriber('/saras/status', ComponentStatus, statuses.append, queue_size=100)
+        diagnostics = DiagnosticsRecorder('mesa_left/contact_forces')
         left = Recorder('/mesa_left/contact_force')
         right = Recorder('/mesa_right/contact_force')
         end = time.time() + 20.0
@@ -87,14 +87,15 @@ class TestContactForces(unittest.TestCase):
             self.assertTrue(all(math.isfinite(v) for v in (m.linear.x, m.linear.y, m.linear.z)))
         late = left.since(t1 + 0.2 + 0.1)  # stale_timeout 0.2 s + margin
         self.assertTrue(late and all(m.linear.x == m.linear.y == m.linear.z == 0.0 for m in late), 'stale force not zero')
-        mine = [s for s in statuses if s.component.endswith('mesa_left/contact_forces')]
-        self.assertTrue(mine, 'no heartbeat from /mesa_left/contact_forces')
-        end = time.time() + 2.0
-        while time.time() < end and mine[-1].rejected < 80:
+        self.assertTrue(diagnostics.statuses, 'no mesa_left/contact_forces status on /diagnostics')
+
+        def rejected():
+            return int(DiagnosticsRecorder.values(diagnostics.statuses[-1])['rejected contacts'])
+        end = time.time() + 3.0  # published every diagnostic_period (1 s)
+        while time.time() < end and (rejected() < 80 or diagnostics.statuses[-1].level != DiagnosticStatus.STALE):
             time.sleep(0.1)
-            mine = [s for s in statuses if s.component.endswith('mesa_left/contact_forces')]
-        self.assertEqual(mine[-1].rejected, 80)
-        self.assertEqual(mine[-1].level, ComponentStatus.STALE)
+        self.assertEqual(rejected(), 80)
+        self.assertEqual(diagnostics.statuses[-1].level, DiagnosticStatus.STALE)
 
         # Valid contact again: force again (no latching of the bad state), then stop: zero.
         stream(contact(0.004, -2.0, 0.0, 0.0), 0.5)
