@@ -11,7 +11,8 @@ import rostest
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import JointState
 
-from saras_simulation import dvrk_motion, rigid
+from saras_common import transforms as tfm
+from saras_simulation import dvrk_motion
 
 import diag_status
 
@@ -42,7 +43,7 @@ class ContractTest(unittest.TestCase):
                 pos = [p.pose.position.x, p.pose.position.y, p.pose.position.z]
                 np.testing.assert_allclose(pos, T[:3, 3], atol=1e-9)
                 q = p.pose.orientation
-                np.testing.assert_allclose(rigid.matrix_from_quaternion([q.x, q.y, q.z, q.w]),
+                np.testing.assert_allclose(tfm.quaternion_to_matrix([q.x, q.y, q.z, q.w]),
                                            T[:3, :3], atol=1e-9)
                 self.assertLess(pos[2], 0.0)
                 if arm != 'ECM':
