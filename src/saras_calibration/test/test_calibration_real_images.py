@@ -118,6 +118,17 @@ def test_duplicates_dropped_and_poor_coverage_explained(images):
     assert 'scale' not in str(err.value)
 
 
+def test_full_collector_keeps_views_that_widen_coverage(images):
+    left, right = images
+    col = StereoSampleCollector(BOARD, SQUARE, max_views=3)
+    for i in (0, 2, 3):                             # three views near the centre
+        assert col.add(left[i], right[i])
+    before = sum(p[3] for p in col.progress())
+    assert col.add(left[5], right[5])               # left06: right edge, widens X
+    assert col.n_views == 3 and sum(p[3] for p in col.progress()) > before
+    assert not col.add(left[3], right[3])           # already kept
+
+
 def test_coverage_problems_name_what_is_missing():
     # Small boards, all in the image centre, fronto-parallel.
     params = [[0.5, 0.5, 0.1, 0.02], [0.52, 0.49, 0.12, 0.03], [0.48, 0.51, 0.11, 0.01]]

@@ -129,19 +129,40 @@ class StereoSampleCollector:
         if (right.shape[1], right.shape[0]) != size or (self.size is not None and size != self.size):
             self.rejected += 1
             return False
-        if self.n_views >= self.max_views:
-            return False
         lc = detect_corners(left, self.board, self.corner_method)
         if lc is None or not views.is_new_view(lc, self.left, size, self.min_motion):
+            return False
+        params = self.cal.get_parameters(lc, None, self.info, size)
+        slot = self._slot(params)
+        if slot is None:
             return False
         rc = detect_corners(right, self.board, self.corner_method)
         if rc is None:
             return False
         self.size = size
-        self.params.append(self.cal.get_parameters(lc, None, self.info, size))
-        self.left.append(lc)
-        self.right.append(rc)
+        if slot == self.n_views:
+            self.params.append(params)
+            self.left.append(lc)
+            self.right.append(rc)
+        else:
+            self.params[slot], self.left[slot], self.right[slot] = params, lc, rc
         return True
+
+    def _slot(self, params):
+        """Index the new view goes to: appended below ``max_views``; when full, it replaces the
+        kept view closest to another one if that widens the coverage; None: dropped."""
+        if self.n_views < self.max_views:
+            return self.n_views
+        p = np.asarray(self.params)
+        d = np.abs(p[:, None, :] - p[None, :, :]).sum(axis=2)
+        np.fill_diagonal(d, np.inf)
+        worst = int(np.argmin(d.min(axis=1)))
+        trial = list(self.params)
+        trial[worst] = params
+
+        def score(ps):
+            return sum(v[2] for v in views.coverage(ps).values())
+        return worst if score(trial) > score(self.params) + 1e-9 else None
 
     def check(self, min_views=DEFAULT_MIN_VIEWS):
         """Raise :class:`StereoCalibrationError` saying what is missing, if anything."""
