@@ -146,7 +146,7 @@ class CrtkArm(object):
         self.last_command = None
         self.rejoin_from = None
         self.rejected = 0
-        self.events = []          # operating-state snapshots to publish, oldest first
+        self.events = [self.snapshot()]   # operating-state snapshots to publish, oldest first
         self.last_reason = ''
 
     # ------------------------------------------------------------------ commands (any thread)
@@ -199,7 +199,7 @@ class CrtkArm(object):
     def solve(self, goal):
         """Joint values for the cartesian ``goal`` (4x4) from the current set-point, or None."""
         q, residual = self.chain.ik(goal, self.joints.q)
-        if residual > self.ik_tolerance * (1.0 if self.chain.orientation_weight >= 1.0 else 20.0):
+        if residual > self.ik_tolerance:
             return None
         return q
 

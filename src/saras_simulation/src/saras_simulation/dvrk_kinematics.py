@@ -178,9 +178,10 @@ def psm_chain(limits=None):
 
 def ecm_chain(limits=None):
     """ECM camera tip in the ECM base (RCM) frame, 4 joints (= ``kinematics.ecm_tip_in_base``).
-    Four joints cannot hold a 6-D goal: the IK favours the position (orientation weight 0.05)."""
+    Four joints cannot hold a 6-D goal: the IK reaches the position and keeps what it can of the
+    orientation (orientation weight 0.001, i.e. 1 rad counts as 1 mm)."""
     return Chain([revolute('y', -1.0), revolute('x', -1.0), fixed_rot('x', math.pi),
-                  prismatic('z'), revolute('z')], limits, orientation_weight=0.05)
+                  prismatic('z'), revolute('z')], limits, orientation_weight=0.001)
 
 
 def mtm_chain():

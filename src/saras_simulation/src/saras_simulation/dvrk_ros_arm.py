@@ -47,8 +47,9 @@ def fill_pose(pose, T):
 class ArmRos(object):
     """Topics of one arm. ``kind`` is 'PSM', 'ECM' or 'MTM'; ``lock`` guards ``core``."""
 
-    def __init__(self, core, kind, joint_names, dvrk_ns, crtk_ns, lock, queue_size=None):
-        self.core, self.kind, self.lock = core, kind, lock
+    def __init__(self, core, kind, joint_names, dvrk_ns, crtk_ns, lock, clock, queue_size=None):
+        """``clock()``: the core's time [s] (dvrk_sim: since its start)."""
+        self.core, self.kind, self.lock, self._now = core, kind, lock, clock
         self.names = list(joint_names)
         self.last_stamp = rospy.Time(0)
         self.prev_cp = None
@@ -111,9 +112,6 @@ class ArmRos(object):
                          rospy.Service(ns + 'inverse_kinematics', QueryInverseKinematics, self._ik)]
 
     # ------------------------------------------------------------------ commands
-    def _now(self):
-        return rospy.Time.now().to_sec()
-
     def _warn(self, ok):
         if not ok:
             rospy.logwarn_throttle(1.0, 'dvrk_sim %s: command rejected: %s'
