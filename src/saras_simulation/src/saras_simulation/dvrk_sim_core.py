@@ -43,7 +43,8 @@ class ConsoleSim(object):
         crtk = dict(cfg.get('crtk_arms') or {})
         try:
             scale = float(con.get('scale', 0.2))
-            mtm_of = dict(con.get('mtm_of', {'PSM1': 'MTMR', 'PSM2': 'MTML'}))
+            mtm_of = {p: m for p, m in dict(con.get('mtm_of', {'PSM1': 'MTMR', 'PSM2': 'MTML'})).items()
+                      if p in self.base.psm_motions}
             centre = dict(con.get('mtm_centre', {'MTML': [0.12, 0.28, -0.36],
                                                  'MTMR': [-0.12, 0.28, -0.36]}))
             reg = {p: dvrk_console.registration_from_rpy(con.get('registration', {}).get(p, [0, 0, 0]))
@@ -53,8 +54,9 @@ class ConsoleSim(object):
             accel = float(crtk.get('joint_acceleration', 2.0))
         except (TypeError, ValueError, AttributeError) as ex:
             raise ValueError('parameter console / crtk_arms invalid: %s' % ex)
-        if set(mtm_of) != set(self.base.psm_motions) or set(mtm_of.values()) != {'MTML', 'MTMR'}:
-            raise ValueError('parameter console/mtm_of must map %s onto MTML and MTMR'
+        if set(mtm_of) != set(self.base.psm_motions) or len(set(mtm_of.values())) != len(mtm_of) \
+                or not set(mtm_of.values()) <= {'MTML', 'MTMR'}:
+            raise ValueError('parameter console/mtm_of must map %s onto MTML / MTMR (one each)'
                              % sorted(self.base.psm_motions))
         self.mtm_of = mtm_of
         self.teleop = {p: dvrk_console.Teleop(scale, reg[p]) for p in mtm_of}
@@ -64,7 +66,7 @@ class ConsoleSim(object):
             self.chains[p] = dvrk_kinematics.psm_chain(lim)
         ecm_lim, ecm_vel = _limits('ECM')
         self.chains['ECM'] = dvrk_kinematics.ecm_chain(ecm_lim)
-        for m in ('MTML', 'MTMR'):
+        for m in mtm_of.values():
             self.chains[m] = dvrk_kinematics.mtm_chain()
         try:
             self.script = dvrk_console.SurgeonScript(
