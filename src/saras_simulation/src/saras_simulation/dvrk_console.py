@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from saras_simulation import rigid
+from saras_common import transforms
 from saras_simulation.dvrk_motion import smoothstep
 
 #: Pedal / button names, dVRK spelling (topic suffixes under footpedals/).
@@ -182,4 +182,4 @@ def registration_from_rpy(rpy):
     """3x3 rotation MTM base -> PSM base from roll, pitch, yaw [rad] (config helper)."""
     if len(rpy) != 3 or not all(math.isfinite(float(v)) for v in rpy):
         raise ValueError('registration must be 3 finite angles [rad], got %r' % (rpy,))
-    return rigid.rpy_to_matrix(*[float(v) for v in rpy])[:3, :3]
+    return transforms.rpy_to_matrix([float(v) for v in rpy])

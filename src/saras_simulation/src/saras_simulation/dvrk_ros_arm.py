@@ -30,16 +30,18 @@ from geometry_msgs.msg import PoseStamped, Quaternion, TwistStamped, WrenchStamp
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Empty, Float64, Float64MultiArray, MultiArrayDimension
 
-from saras_simulation import dvrk_kinematics, rigid
+from saras_common import transforms
+
+from saras_simulation import dvrk_kinematics
 
 
 def pose_to_matrix(pose):
     p, o = pose.position, pose.orientation
-    return rigid.transform_from_pose((p.x, p.y, p.z), (o.x, o.y, o.z, o.w))
+    return transforms.transform_from_quaternion((p.x, p.y, p.z), (o.x, o.y, o.z, o.w))
 
 
 def fill_pose(pose, T):
-    p, q = T[:3, 3], rigid.quaternion_from_matrix(T[:3, :3])
+    p, q = T[:3, 3], transforms.quaternion_from_matrix(T[:3, :3])
     pose.position.x, pose.position.y, pose.position.z = p
     pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
 
