@@ -54,7 +54,7 @@ target_include_directories(${PROJECT_NAME}_endoscope_render SYSTEM PRIVATE ${EIG
   ${catkin_INCLUDE_DIRS})
 target_link_libraries(${PROJECT_NAME}_endoscope_render ${PROJECT_NAME}_endoscope_core ${OpenCV_LIBRARIES})
 
-install(TARGETS ${PROJECT_NAME}_endoscope_core ${PROJECT_NAME}_endoscope_sim ${PROJECT_NAME}_endoscope_nodelet
+install(TARGETS ${PROJECT_NAME}_endoscope_core ${PROJECT_NAME}_endoscope_nodelet ${PROJECT_NAME}_endoscope_sim
   ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
   RUNTIME DESTINATION ${CATKIN_GLOBAL_BIN_DESTINATION})
