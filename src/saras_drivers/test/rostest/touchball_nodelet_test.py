@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """rostest: the receiver nodelet loaded into /teleop/teleop_manager publishes under the contract's
-names (/touchball/<side>/..., /tf, /touchball/status), streams a fake console's packets and is OK
-on touchball/status and on /diagnostics (under the nodelet's name, hardware_id console_link)."""
+names (/touchball/<side>/..., /tf, /touchball/status), streams the packets of a fake console
+(250 Hz, from this test node) and is OK on touchball/status and on /diagnostics (under the
+nodelet's name, hardware_id console_link)."""
 import sys
 import threading
 import time
@@ -15,6 +16,8 @@ from tf2_msgs.msg import TFMessage
 
 from touchball_fake_console import FakeConsole, LinkDiagnostics
 
+RATE = 250.0  # [Hz] console stream
+
 
 class TestNodelet(unittest.TestCase):
     def test_names_and_stream(self):
@@ -26,8 +29,21 @@ class TestNodelet(unittest.TestCase):
         diag = LinkDiagnostics()
         console = FakeConsole(rospy.get_param('~port'), rospy.get_param('~command_port'))
         self.assertTrue(console.connect(), 'no session (handshake)')
-        streamer = threading.Thread(target=console.stream, args=(250.0, 30.0), daemon=True)
+        stop = threading.Event()
+
+        def stream():
+            k = 0
+            while not stop.wait(1.0 / RATE):
+                console.send(k / RATE)
+                k += 1
+        streamer = threading.Thread(target=stream, daemon=True)
         streamer.start()
+
+        def finish():
+            stop.set()
+            streamer.join(1.0)
+            console.close()
+        self.addCleanup(finish)
         end = time.monotonic() + 40.0
         while time.monotonic() < end and (len(states) < 100 or not status or status[-1].level != 0):
             time.sleep(0.1)
