@@ -23,7 +23,8 @@
  * Health: diagnostic_updater on /diagnostics (hardware_id `recording`), one status "<node>: bag" with
  * the messages received, dropped by the full buffer, queued and failed writes (WARN while messages are
  * dropped, ERROR after a write error).
- * Exit status: 0 closed cleanly, 1 bad arguments or the bag cannot be written.
+ * ROS master lost (unreachable 2 s) or restarted: the bag is closed (safe stop) with an error.
+ * Exit status: 0 closed cleanly, 1 bad arguments, the bag cannot be written, or a disk fault.
  */
 #include <sys/statvfs.h>
 
@@ -460,6 +461,41 @@ private:
   std::uint64_t reported_dropped_ = 0;  ///< drop count at the previous diagnostic update
 };
 
+/**
+ * ROS master loss: unreachable for 2 s, or restarted (other PID: this node is no longer registered,
+ * nothing it records can be inspected or restarted). Polled every 0.5 s from the main loop.
+ */
+class MasterWatch
+{
+public:
+  /// Empty while the master is fine, else the reason.
+  std::string poll()
+  {
+    const ros::WallTime now = ros::WallTime::now();
+    if (now < next_)
+      return "";
+    next_ = now + ros::WallDuration(0.5);
+    XmlRpc::XmlRpcValue args, result, payload;
+    args[0] = ros::this_node::getName();
+    if (!ros::master::execute("getPid", args, result, payload, false))
+    {
+      if (down_since_.isZero())
+        down_since_ = now;
+      return (now - down_since_).toSec() >= 2.0 ? "ROS master unreachable for 2 s" : "";
+    }
+    down_since_ = ros::WallTime();
+    const int pid = static_cast<int>(payload);
+    if (pid_ != 0 && pid != pid_)
+      return "ROS master restarted (pid " + std::to_string(pid_) + " -> " + std::to_string(pid) + ")";
+    pid_ = pid;
+    return "";
+  }
+
+private:
+  ros::WallTime next_, down_since_;
+  int pid_ = 0;
+};
+
 /// SIGTERM as SIGINT: ros::ok() turns false, main closes (indexes) the bag.
 void onTerm(int)
 {
@@ -495,9 +531,16 @@ int main(int argc, char** argv)
   updater.add("bag", &recorder, &saras_bringup::BagRecorder::diagnose);
   const bool timed = options.duration > 0.0;
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timed ? options.duration : 0.0);
+  saras_bringup::MasterWatch master;
   while (ros::ok() && (!timed || ros::WallTime::now() < end))
   {
     updater.update();  // publishes at ~diagnostic_period (1 s)
+    const std::string lost = master.poll();
+    if (!lost.empty())
+    {
+      ROS_ERROR("bag_recorder: %s: closing the bag (safe stop; restart the platform to record again)", lost.c_str());
+      break;
+    }
     ros::WallDuration(0.05).sleep();
   }
   return recorder.stop() ? 0 : 1;

@@ -166,7 +166,7 @@ TEST(VelocityIntegratorResync, LeadLimitedThenFaultWhenTheArmStops)
 {
   IntegratorParams p;
   p.max_lead = 0.003;
-  p.max_stall = 0.5;
+  p.max_stall = 0.5;  // (default 1 s)
   VelocityIntegrator vi(p);
   const KDL::Frame arm(KDL::Vector(0.1, 0.0, 0.0));
   ASSERT_TRUE(vi.start(arm));
@@ -184,6 +184,8 @@ TEST(VelocityIntegratorResync, LeadLimitedThenFaultWhenTheArmStops)
   EXPECT_GT(k, 600);
   EXPECT_LT(k, 700);
   EXPECT_EQ(vi.faultReason(), "arm not following the set-point");
+  // the held set-point is where the arm is
+  EXPECT_LT((vi.pose().p - arm.p).Norm(), 1e-12);
   // in FAULT nothing integrates
   const KDL::Frame held = vi.pose();
   vi.step(linear(0.02, 0.0, 0.0), 0.001, false);

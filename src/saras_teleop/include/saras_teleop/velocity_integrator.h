@@ -11,10 +11,11 @@
  * fed continuously (setMeasured). A step that would take the set-point further than max_lead from
  * the measured pose is shortened onto that sphere (the set-point waits for an arm that lags); if it
  * keeps waiting for longer than max_stall, or a fault is declared (console link stale, arm state
- * stale, ...), the integrator enters FAULT: no set-point is commanded (the arm holds by itself).
- * It leaves FAULT, and CLUTCHED, only through the operator's clutch: press, then release; on the
- * release the set-point is re-anchored on the measured pose, so the first set-point after a
- * recovery is the held pose and motion resumes from there at <= max_linear_velocity.
+ * stale, ...), the integrator enters FAULT: the set-point jumps back to the measured pose and
+ * stays there (the arm holds where it is). It leaves FAULT, and CLUTCHED, only through the
+ * operator's clutch: press, then release; on the release the set-point is re-anchored on the
+ * measured pose, so the first set-point after a recovery is the held pose and motion resumes from
+ * there at <= max_linear_velocity.
  */
 #ifndef SARAS_TELEOP_VELOCITY_INTEGRATOR_H
 #define SARAS_TELEOP_VELOCITY_INTEGRATOR_H
@@ -36,7 +37,7 @@ struct IntegratorParams
   Eigen::Vector3d workspace_min = Eigen::Vector3d::Constant(-1.0);  ///< box in the slave base frame [m]
   Eigen::Vector3d workspace_max = Eigen::Vector3d::Constant(1.0);   ///< [m]
   double max_lead = 0.003;   ///< [m] largest set-point lead over the measured position
-  double max_stall = 0.5;    ///< [s] longest time the lead may stay saturated before FAULT
+  double max_stall = 1.0;    ///< [s] longest time the lead may stay saturated before FAULT
   /// Throws std::invalid_argument naming the offending parameter.
   void validate() const;
 };
@@ -64,7 +65,7 @@ public:
   /// Latest measured slave pose (re-anchoring and lead limit). Returns false if not finite.
   bool setMeasured(const KDL::Frame& pose);
   bool hasMeasured() const { return have_measured_; }
-  /// Enter FAULT (no-op while WAITING); @p why is kept for the diagnostics.
+  /// Enter FAULT (no-op while WAITING): set-point := measured pose; @p why is kept for the diagnostics.
   void fault(const std::string& why);
   /**
    * Operator clutch state. FOLLOWING + pressed -> CLUTCHED; FAULT + pressed -> CLUTCHED;
@@ -73,7 +74,7 @@ public:
    */
   bool clutch(bool pressed);
   Mode mode() const { return mode_; }
-  /// true while the set-point is to be commanded (FOLLOWING)
+  /// true while the set-point follows the master (FOLLOWING); otherwise it holds
   bool commanding() const { return mode_ == Mode::FOLLOWING; }
   const std::string& faultReason() const { return why_; }
   /// Distance set-point - measured position [m] (0 without a measurement)

@@ -66,6 +66,8 @@ void VelocityIntegrator::fault(const std::string& why)
     return;
   if (mode_ != Mode::FAULT)
     ++faults_;
+  if (have_measured_)
+    pose_ = measured_;  // hold where the arm is, not where the set-point had run to
   mode_ = Mode::FAULT;
   why_ = why;
   stalled_ = 0.0;

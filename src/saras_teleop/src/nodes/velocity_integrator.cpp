@@ -15,7 +15,7 @@
  * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
  * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
  *
- * Faults (FAULT: nothing is published on target_pose, the arm holds by itself; cleared only by the
+ * Faults (FAULT: the set-point is set to the measured pose and held there; cleared only by the
  * operator's clutch on device_state (HapticDeviceState): press, release -> re-anchored on the
  * measured pose): console link STALE; measured pose older than ~measured_timeout; no twist for
  * ~fault_timeout after twists had flowed; set-point lead saturated (~max_lead) for ~max_stall;
@@ -159,8 +159,8 @@ private:
     if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started())
       return;
     vi_.fault(why);
-    ROS_ERROR("velocity_integrator: HOLD (%s): no set-point is commanded until the operator presses and releases "
-              "the clutch",
+    ROS_ERROR("velocity_integrator: HOLD (%s): the arm is held at its measured pose until the operator presses and "
+              "releases the clutch",
               why.c_str());
   }
 
@@ -215,8 +215,8 @@ private:
 
   void publish(const ros::Time& stamp)
   {
-    if (!vi_.commanding())
-      return;  // FAULT / CLUTCHED: the arm holds by itself; nothing stale is ever sent
+    if (!vi_.started())
+      return;  // FAULT / CLUTCHED: the held set-point (the measured pose at the fault) is published
     const KDL::Frame& f = vi_.pose();
     const boost::shared_ptr<geometry_msgs::PoseStamped> pose = pose_pool_->next();  // zero-copy in a manager
     pose->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
