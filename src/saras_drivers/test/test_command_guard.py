@@ -36,6 +36,10 @@ def test_first_target_must_be_at_the_measured_pose():
     assert g2.check((0.0, 0.0, 0.0), 0.0, 0.0) == (False, 'no_measurement')
     g.measured((0.0, 0.0, 0.0), 0.0)
     assert g.check((0.0, 0.0, 0.0), 0.0, 1.0) == (False, 'no_measurement')  # measurement 1 s old
+    g3 = CommandGuard((-1, -1, -1), (1, 1, 1), 0.06, 0.001, require_measurement=False)
+    assert g3.check((0.5, 0.0, 0.0), 0.0, 0.0) == (True, '')     # link test without a state stream
+    g3.sent((0.5, 0.0, 0.0), 0.0)
+    assert g3.check((0.0, 0.0, 0.0), 0.0, 0.004) == (False, 'speed')
 
 
 def test_speed_limit_per_step_and_spoofed_stream():

@@ -10,7 +10,8 @@ trusting whichever ROS publisher sent it:
   one, dt the time between them [s];
 * re-synchronisation: the first target after a gap longer than ``resync_gap`` [s] (start, hold,
   reconnection, see :meth:`CommandGuard.reset`) must lie within ``max_jump`` [m] of the arm's
-  measured position (fresher than ``measured_timeout``); no measured position => rejected.
+  measured position (fresher than ``measured_timeout``); no measured position => rejected (unless
+  ``require_measurement`` is False: link tests without a state stream; the speed limit still applies).
 
 A rejected target is not forwarded: the arm holds its last target. Times are monotonic seconds.
 """
@@ -22,7 +23,8 @@ REASONS = ('zero_stamp', 'future_stamp', 'stale', 'workspace', 'speed', 'jump', 
 
 class CommandGuard(object):
     def __init__(self, workspace_min, workspace_max, max_speed, max_jump, resync_gap=0.25,
-                 max_age=0.1, max_future=0.02, step_tolerance=0.0005, measured_timeout=0.25):
+                 max_age=0.1, max_future=0.02, step_tolerance=0.0005, measured_timeout=0.25,
+                 require_measurement=True):
         if len(workspace_min) != 3 or len(workspace_max) != 3 or \
                 not all(lo < hi for lo, hi in zip(workspace_min, workspace_max)):
             raise ValueError('workspace_min/workspace_max: 3 values each, min < max on every axis [m]')
@@ -36,6 +38,7 @@ class CommandGuard(object):
         self.max_speed, self.max_jump = float(max_speed), float(max_jump)
         self.resync_gap, self.max_age, self.max_future = resync_gap, max_age, max_future
         self.tol, self.measured_timeout = step_tolerance, measured_timeout
+        self.require_measurement = bool(require_measurement)
         self.last = None            # (t, position) of the last forwarded target
         self.meas = None            # (t, position) of the last measured position
         self.rejected = dict((r, 0) for r in REASONS)
@@ -78,7 +81,7 @@ class CommandGuard(object):
             allowed = self.max_speed * max(0.0, now - self.last[0]) + self.tol
             return 'speed' if _dist(p, self.last[1]) > allowed else ''
         if self.meas is None or now - self.meas[0] > self.measured_timeout:
-            return 'no_measurement'
+            return 'no_measurement' if self.require_measurement else ''
         return 'jump' if _dist(p, self.meas[1]) > self.max_jump else ''
 
 
