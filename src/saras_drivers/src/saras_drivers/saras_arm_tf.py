@@ -12,7 +12,9 @@ Supported joint types: ``revolute``, ``continuous``, ``prismatic`` (one axis) an
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from saras_description.transforms import axis_angle, matrix_to_quat, rpy_to_matrix, trans
+from saras_common.transforms import axis_angle, rpy_to_matrix
+from saras_common.transforms import quaternion_from_matrix as matrix_to_quat
+from saras_common.transforms import translation as trans
 
 MOVING = ('revolute', 'continuous', 'prismatic')
 

@@ -1,13 +1,13 @@
 """Rigid-body helpers of the main-surgeon simulators (no ROS imports).
 
-Thin 3x3 / 4x4 adapters over :mod:`saras_description.transforms` (the platform's one
+Thin 3x3 / 4x4 adapters over :mod:`saras_common.transforms` (the platform's one
 implementation of rotations and quaternions) and :mod:`saras_description.frames` (the one parser of
 the frames-YAML format). Conventions: ``T_a_b`` maps coordinates in frame ``b`` to frame ``a``
 (``p_a = T_a_b @ p_b``); quaternions are ``(x, y, z, w)`` as in geometry_msgs; metres, radians.
 """
 import numpy as np
 from saras_description import frames as _frames
-from saras_description import transforms as _tf
+from saras_common import transforms as _tf
 
 
 def rot_x(a):
@@ -43,9 +43,9 @@ def make_transform(R=None, t=None):
 #: Inverse of a rigid 4x4 transform.
 invert = _tf.inverse
 #: Unit quaternion ``(x, y, z, w)`` (w >= 0) of a 3x3 rotation matrix.
-quaternion_from_matrix = _tf.matrix_to_quat
+quaternion_from_matrix = _tf.quaternion_from_matrix
 #: 3x3 rotation matrix of a quaternion ``(x, y, z, w)`` (normalised).
-matrix_from_quaternion = _tf.quat_to_matrix
+matrix_from_quaternion = _tf.quaternion_to_matrix
 
 
 def transform_from_pose(xyz, quat):
