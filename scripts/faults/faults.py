@@ -4,7 +4,8 @@
   faults.py probe OUT          record what the faults are judged on into OUT/*.csv until SIGINT:
                                set-points and measured poses of both arms, collision distances,
                                ERROR/STALE statuses on /diagnostics (keeps recording after a master
-                               loss over its existing connections)
+                               loss over its existing connections); and be the operator: press the
+                               clutch of both devices for 0.2 s every 4 s (OUT/clutch.csv)
   faults.py pid NODE           PID of a ROS node (asked over its own XML-RPC API)
   faults.py spoof-force SIDE S publish 1e6 N on /mesa_SIDE/contact_force at 60 Hz for S seconds
   faults.py spoof-target SIDE S publish zero-stamp targets 2 cm deeper at 500 Hz for S seconds
@@ -12,6 +13,7 @@
                                exit 1 if an expectation is violated
 Times are wall-clock seconds (time.time()); all processes run on this host.
 """
+import bisect
 import csv
 import math
 import os
@@ -26,7 +28,7 @@ def probe(out):
     import rospy
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import PoseStamped
-    from saras_msgs.msg import CollisionReport
+    from saras_msgs.msg import CollisionReport, HapticDeviceState
     rospy.init_node('faults_probe', disable_signals=True)
     files = {}
 
@@ -58,9 +60,18 @@ def probe(out):
 
     rospy.Subscriber('/collision/report', CollisionReport, on_collision, queue_size=10)
     rospy.Subscriber('/diagnostics', DiagnosticArray, on_diag, queue_size=50)
+    clutch = dict((side, rospy.Publisher('/touchball/%s/state' % side, HapticDeviceState, queue_size=10))
+                  for side in SIDES)
     try:
         while True:
-            time.sleep(0.2)
+            time.sleep(3.8)
+            writer('clutch').writerow(('%.6f' % time.time(),))
+            for _ in range(10):          # pressed 0.2 s; the receiver's own states say released
+                for side in SIDES:
+                    m = HapticDeviceState(device=side, clutch=True)
+                    m.header.stamp = rospy.Time.now()
+                    clutch[side].publish(m)
+                time.sleep(0.02)
     except KeyboardInterrupt:
         pass
 
@@ -77,13 +88,15 @@ def spoof(kind, side, seconds):
     import rospy
     from geometry_msgs.msg import PoseStamped, Twist
     rospy.init_node('faults_spoof_%s' % kind.replace('-', '_'), anonymous=True)
+    stamp_file = os.environ.get('FAULTS_SPOOF_TIMES')
     if kind == 'force':
         pub, rate = rospy.Publisher('/mesa_%s/contact_force' % side, Twist, queue_size=10), 60.0
     else:
         pub, rate = rospy.Publisher('/mesa_%s/target_pose' % side, PoseStamped, queue_size=10), 500.0
         ee = rospy.wait_for_message('/mesa_%s/ee_pose' % side, PoseStamped, timeout=5.0)
     time.sleep(0.5)                      # connections
-    end = time.time() + seconds
+    start = time.time()
+    end = start + seconds
     while time.time() < end:
         if kind == 'force':
             m = Twist()
@@ -95,6 +108,9 @@ def spoof(kind, side, seconds):
             m.pose.position.z = ee.pose.position.z - 0.02
         pub.publish(m)
         time.sleep(1.0 / rate)
+    if stamp_file:
+        with open(stamp_file, 'w') as f:
+            f.write('%.6f %.6f\n' % (start, time.time()))
 
 
 # ---------------------------------------------------------------------------------------- analysis
@@ -115,18 +131,25 @@ def poses(out, name, zero_stamp=None):
     return rows
 
 
+def _times(rows):
+    key = id(rows)
+    if key not in _TIMES:
+        _TIMES[key] = (rows, [r[0] for r in rows])
+    return _TIMES[key][1]
+
+
+_TIMES = {}
+
+
 def window(rows, a, b):
-    return [r for r in rows if a <= r[0] < b]
+    ts = _times(rows)
+    return rows[bisect.bisect_left(ts, a):bisect.bisect_left(ts, b)]
 
 
 def at(rows, t):
     """Last sample at or before t (None if none)."""
-    best = None
-    for r in rows:
-        if r[0] > t:
-            break
-        best = r
-    return best
+    i = bisect.bisect_right(_times(rows), t)
+    return rows[i - 1] if i else None
 
 
 def hold_time(ee, t_fault, t_end, tol=0.0005):
@@ -134,10 +157,17 @@ def hold_time(ee, t_fault, t_end, tol=0.0005):
     w = window(ee, t_fault, t_end)
     if not w:
         return None
-    for i, (t, p) in enumerate(w):
-        if all(math.dist(p, q) <= tol for _, q in w[i:]):
-            return max(0.0, t - t_fault)
-    return None
+    # scan backwards: the earliest sample from which every later one stays within tol of it
+    lo = [float('inf')] * 3
+    hi = [-float('inf')] * 3
+    start = None
+    for t, p in reversed(w):
+        lo = [min(a, b) for a, b in zip(lo, p)]
+        hi = [max(a, b) for a, b in zip(hi, p)]
+        if math.dist(lo, hi) > tol:
+            break
+        start = t
+    return None if start is None else max(0.0, start - t_fault)
 
 
 def peak_speed(ee, a, b, span=0.02):
@@ -210,8 +240,12 @@ def judge(out, ev, nxt_t):
             bad.append('recovery jump %.2f mm > 1 mm' % (1e3 * jump))
         elif float(r['peak speed on recovery [mm/s]']) > 50.0:
             bad.append('recovery speed %s mm/s > 50' % r['peak speed on recovery [mm/s]'])
-    if 'right' in keys and (not gaps or max(gaps) > 0.25):
-        bad.append('right arm affected (set-point gap %s ms)' % r['right arm: longest set-point gap [ms]'])
+    if 'right' in keys:
+        held_r = [d for d in load(out, 'diag') if t_f <= float(d[0]) < t_back and
+                  d[2].startswith('teleop/right/velocity_integrator') and 'HOLD' in d[3]]
+        path_r = sum(math.dist(a[1], b[1]) for a, b in zip(window(ee_r, t_f, t_back), window(ee_r, t_f, t_back)[1:]))
+        if held_r or path_r < 0.001:
+            bad.append('right arm affected (%s, moved %.1f mm)' % ('held' if held_r else 'not held', 1e3 * path_r))
     if 'diag' in keys and diags == []:
         bad.append('nothing reported on /diagnostics')
     if 'unknown' in keys and coll and not all(math.isnan(c) for c in coll):

@@ -19,7 +19,8 @@
  * operator's clutch on device_state (HapticDeviceState): press, release -> re-anchored on the
  * measured pose): console link STALE; measured pose older than ~measured_timeout; no twist for
  * ~fault_timeout after twists had flowed; set-point lead saturated (~max_lead) for ~max_stall;
- * a restart under the same ROS master (~await_clutch_on_restart). Collision monitoring
+ * a restart under the same ROS master (~await_clutch_on_restart). Before the first step integrated
+ * with the link up (start-up) these are plain holds, not faults. Collision monitoring
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  */
@@ -156,7 +157,8 @@ private:
 
   void fault(const std::string& why)
   {
-    if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started())
+    // start-up (console, arm state and twists not all up yet) is a hold, not a fault
+    if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started() || !engaged_)
       return;
     vi_.fault(why);
     ROS_ERROR("velocity_integrator: HOLD (%s): the arm is held at its measured pose until the operator presses and "
@@ -206,7 +208,10 @@ private:
     {
       const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
       if (dt > 0.0 && dt <= max_step_)
+      {
         vi_.step(v, dt, hold_);  // this twist held over the sample interval it represents
+        engaged_ = engaged_ || (!hold_ && vi_.commanding());
+      }
       if (dt > 0.0 || last_stamp_.isZero() || dt < -max_step_)
         last_stamp_ = stamp;
     }
@@ -303,6 +308,7 @@ private:
   std::size_t clutch_faults_ = 0;  // faults already cleared by a clutch
   std::string collision_loss_ = "slow";
   bool await_clutch_ = false, collision_lost_ = false;
+  bool engaged_ = false;  // integrated once with the link up: holds from now on are faults
   std::string frame_;
   unsigned tf_decimation_ = 10;
   unsigned long count_ = 0;
