@@ -170,8 +170,11 @@ def hold_time(ee, t_fault, t_end, tol=0.0005):
     return None if start is None else max(0.0, start - t_fault)
 
 
-def peak_speed(ee, a, b, span=0.02):
+def peak_speed(ee, a, b, span=0.02, stamps=None):
+    """Peak speed [m/s] over span; with stamps (t -> sample time) the arm's own sample times are used."""
     w = window(ee, a, b)
+    if stamps:
+        w = [(stamps[t], p) for t, p in w if stamps.get(t, 0.0) > 0.0]
     best, j = 0.0, 0
     for i in range(len(w)):
         while j < len(w) and w[j][0] - w[i][0] < span:
@@ -198,6 +201,7 @@ def judge(out, ev, nxt_t):
     name, t_f, t_back = ev['fault'], float(ev['t_fault']), float(ev['t_back'])
     side = 'left'
     ee, sp = poses(out, 'ee_' + side), poses(out, 'target_' + side, zero_stamp=False)
+    ee_stamp = dict((float(x[0]), float(x[1])) for x in load(out, 'ee_' + side))
     ee_r, sp_r = poses(out, 'ee_right'), poses(out, 'target_right', zero_stamp=False)
     r = {'fault': name, 'expected': ev['expected']}
     keys = ev['checks'].split()
@@ -205,18 +209,21 @@ def judge(out, ev, nxt_t):
     if keys == ['none']:
         r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
         return r, bad
-    hold = hold_time(ee, t_f, t_back)
+    # hold: the command chain (set-point frozen, re-anchors on the clutch aside); motion: the arm
+    # after the hold plus SETTLE for the simulated arm's own state latency
+    arm_hold = hold_time(ee, t_f, t_back)
+    hold = min([h for h in (hold_time(sp, t_f, t_back, tol=0.00005), arm_hold) if h is not None], default=None)
     r['hold [ms]'] = '-' if hold is None else '%.0f' % (1e3 * hold)
-    ref = at(ee, t_f + (hold or 0.0))
-    moved = max((math.dist(p, ref[1]) for _, p in window(ee, t_f + (hold or 0.0), t_back)), default=0.0) if ref else float('nan')
-    r['motion in fault [mm]'] = '%.2f' % (1e3 * moved)
+    ref = at(ee, t_f + (hold or 0.0) + SETTLE)
+    moved = max((math.dist(p, ref[1]) for _, p in window(ee, ref[0], t_back)), default=0.0) if ref else float('nan')
+    r['arm motion after hold [mm]'] = '%.2f' % (1e3 * moved)
     t_res = resume_time(sp, t_back, nxt_t)
     if t_res is not None:
         before = at(ee, t_res)
         first = at(sp, t_res + 1e-6)
         jump = math.dist(first[1], before[1]) if before and first else float('nan')
         r['first set-point vs held [mm]'] = '%.2f' % (1e3 * jump)
-        r['peak speed on recovery [mm/s]'] = '%.1f' % (1e3 * peak_speed(ee, t_res, t_res + 2.0))
+        r['peak speed on recovery [mm/s]'] = '%.1f' % (1e3 * peak_speed(ee, t_res, t_res + 2.0, stamps=ee_stamp))
         r['resumed after [s]'] = '%.1f' % (t_res - t_f)
     else:
         r['first set-point vs held [mm]'] = r['peak speed on recovery [mm/s]'] = r['resumed after [s]'] = '-'
@@ -252,19 +259,21 @@ def judge(out, ev, nxt_t):
         bad.append('collision distance stayed finite (stale green) while the pose was missing')
     if 'spoof' in keys:      # the arm never follows the spoofed targets (2 cm deeper)
         dev = max((math.dist(p, at(sp, t)[1]) for t, p in window(ee, t_f, t_back) if at(sp, t)), default=0.0)
-        r['motion in fault [mm]'] = 'max %.2f from the real set-point' % (1e3 * dev)
+        r['arm motion after hold [mm]'] = 'max %.2f from the real set-point' % (1e3 * dev)
         if dev > 0.004:
             bad.append('arm %.1f mm away from the real set-point' % (1e3 * dev))
-    if 'slow' in keys:       # degraded: set-point speed <= 20 % of 50 mm/s (+ margin)
-        v = peak_speed(sp, t_f + 1.0, t_back, span=0.1)
-        r['peak speed on recovery [mm/s]'] = 'set-point %.1f (degraded)' % (1e3 * v)
+    if 'slow' in keys:       # degraded: arm speed <= 20 % of 50 mm/s (+ margin)
+        v = peak_speed(ee, t_f + 1.0, t_back, span=0.1, stamps=ee_stamp)
+        r['peak speed on recovery [mm/s]'] = 'arm %.1f (degraded)' % (1e3 * v)
         if v > 0.012:
-            bad.append('set-point at %.1f mm/s without collision monitoring' % (1e3 * v))
+            bad.append('arm at %.1f mm/s without collision monitoring' % (1e3 * v))
     r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
     return r, bad
 
 
-COLUMNS = ['fault', 'expected', 'hold [ms]', 'motion in fault [mm]', 'resumed after [s]',
+SETTLE = 0.3   # [s] the simulated arm's state latency on a loaded host (state lag 60-150 ms)
+
+COLUMNS = ['fault', 'expected', 'hold [ms]', 'arm motion after hold [mm]', 'resumed after [s]',
            'first set-point vs held [mm]', 'peak speed on recovery [mm/s]', 'right arm: longest set-point gap [ms]',
            'collision distance left in fault', '/diagnostics ERROR/STALE', 'verdict']
 

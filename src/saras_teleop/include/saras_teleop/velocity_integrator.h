@@ -11,8 +11,8 @@
  * fed continuously (setMeasured). A step that would take the set-point further than max_lead from
  * the measured pose is shortened onto that sphere (the set-point waits for an arm that lags); if it
  * keeps waiting for longer than max_stall, or a fault is declared (console link stale, arm state
- * stale, ...), the integrator enters FAULT: the set-point jumps back to the measured pose and
- * stays there (the arm holds where it is). It leaves FAULT, and CLUTCHED, only through the
+ * stale, ...), the integrator enters FAULT: the set-point freezes (at most max_lead from the
+ * measured pose: the arm holds at, or short of, the target it already has). It leaves FAULT, and CLUTCHED, only through the
  * operator's clutch: press, then release; on the release the set-point is re-anchored on the
  * measured pose, so the first set-point after a recovery is the held pose and motion resumes from
  * there at <= max_linear_velocity.
@@ -65,7 +65,7 @@ public:
   /// Latest measured slave pose (re-anchoring and lead limit). Returns false if not finite.
   bool setMeasured(const KDL::Frame& pose);
   bool hasMeasured() const { return have_measured_; }
-  /// Enter FAULT (no-op while WAITING): set-point := measured pose; @p why is kept for the diagnostics.
+  /// Enter FAULT (no-op while WAITING): the set-point freezes; @p why is kept for the diagnostics.
   void fault(const std::string& why);
   /**
    * Operator clutch state. FOLLOWING + pressed -> CLUTCHED; FAULT + pressed -> CLUTCHED;

@@ -66,8 +66,8 @@ void VelocityIntegrator::fault(const std::string& why)
     return;
   if (mode_ != Mode::FAULT)
     ++faults_;
-  if (have_measured_)
-    pose_ = measured_;  // hold where the arm is, not where the set-point had run to
+  // the set-point freezes: the arm already holds this (latest) target, so holding it adds no motion;
+  // the measured pose is not re-commanded here (under load it is up to a few 100 ms old)
   mode_ = Mode::FAULT;
   why_ = why;
   stalled_ = 0.0;

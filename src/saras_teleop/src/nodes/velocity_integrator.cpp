@@ -15,7 +15,7 @@
  * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
  * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
  *
- * Faults (FAULT: the set-point is set to the measured pose and held there; cleared only by the
+ * Faults (FAULT: the set-point freezes, <= max_lead from the measured pose; cleared only by the
  * operator's clutch on device_state (HapticDeviceState): press, release -> re-anchored on the
  * measured pose): console link STALE; measured pose older than ~measured_timeout; no twist for
  * ~fault_timeout after twists had flowed; set-point lead saturated (~max_lead) for ~max_stall;
@@ -78,7 +78,7 @@ public:
     start_timeout_ = prm.number("start_timeout", 10.0, "s", { positive() });
     input_timeout_ = prm.number("input_timeout", 0.05, "s", { positive() });
     max_step_ = prm.number("max_step", 0.05, "s", { positive() });
-    measured_timeout_ = prm.number("measured_timeout", 0.25, "s", { positive() });
+    measured_timeout_ = prm.number("measured_timeout", 0.5, "s", { positive() });
     fault_timeout_ = prm.number("fault_timeout", 0.5, "s", { positive() });
     collision_timeout_ = prm.number("collision_timeout", 0.5, "s", { positive() });
     collision_loss_ = prm.text("collision_loss", "slow", { saras_common::oneOf({ "hold", "slow", "ignore" }) });
@@ -161,7 +161,7 @@ private:
     if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started() || !engaged_)
       return;
     vi_.fault(why);
-    ROS_ERROR("velocity_integrator: HOLD (%s): the arm is held at its measured pose until the operator presses and "
+    ROS_ERROR("velocity_integrator: HOLD (%s): set-point frozen, the arm holds until the operator presses and "
               "releases the clutch",
               why.c_str());
   }
@@ -303,7 +303,7 @@ private:
   RateMeter published_;
   tf2_ros::TransformBroadcaster broadcaster_;
   double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05, max_step_ = 0.05;
-  double measured_timeout_ = 0.25, fault_timeout_ = 0.5, collision_timeout_ = 0.5, collision_scale_ = 0.2;
+  double measured_timeout_ = 0.5, fault_timeout_ = 0.5, collision_timeout_ = 0.5, collision_scale_ = 0.2;
   KDL::Vector last_sent_;  // position of the last published set-point
   std::size_t clutch_faults_ = 0;  // faults already cleared by a clutch
   std::string collision_loss_ = "slow";
