@@ -1,5 +1,7 @@
 // Core tests of the velocity integrator and the delay/loss channel (no ROS).
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -148,4 +150,134 @@ TEST(DelayChannel, RandomAndBurstyLossRates)
   ChannelParams bad;
   bad.loss = 1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+namespace
+{
+Vector6d linear(double x, double y, double z)
+{
+  Vector6d v = Vector6d::Zero();
+  v << x, y, z, 0.0, 0.0, 0.0;
+  return v;
+}
+}  // namespace
+
+TEST(VelocityIntegratorResync, LeadLimitedThenFaultWhenTheArmStops)
+{
+  IntegratorParams p;
+  p.max_lead = 0.003;
+  p.max_stall = 0.5;  // (default 1 s)
+  VelocityIntegrator vi(p);
+  const KDL::Frame arm(KDL::Vector(0.1, 0.0, 0.0));
+  ASSERT_TRUE(vi.start(arm));
+  ASSERT_TRUE(vi.setMeasured(arm));  // the arm never moves
+  double worst = 0.0;
+  int k = 0;
+  for (; k < 2000 && vi.commanding(); ++k)  // 20 mm/s for up to 2 s
+  {
+    vi.step(linear(0.02, 0.0, 0.0), 0.001, false);
+    worst = std::max(worst, vi.lead());
+  }
+  EXPECT_LE(worst, 0.003 + 1e-9);  // never runs away from the arm
+  EXPECT_EQ(vi.mode(), VelocityIntegrator::Mode::FAULT);
+  // 3 mm reached after 150 ms, then saturated for max_stall: fault at ~650 ms (margin for dt sums)
+  EXPECT_GT(k, 600);
+  EXPECT_LT(k, 700);
+  EXPECT_EQ(vi.faultReason(), "arm not following the set-point");
+  // the held set-point is the frozen one, within max_lead of the arm
+  EXPECT_LE(vi.lead(), 0.003 + 1e-9);
+  // in FAULT nothing integrates
+  const KDL::Frame held = vi.pose();
+  vi.step(linear(0.02, 0.0, 0.0), 0.001, false);
+  EXPECT_TRUE(KDL::Equal(held, vi.pose(), 1e-15));
+}
+
+TEST(VelocityIntegratorResync, ArmThatFollowsIsNeverLimited)
+{
+  IntegratorParams p;
+  VelocityIntegrator vi(p);
+  ASSERT_TRUE(vi.start(KDL::Frame::Identity()));
+  for (int k = 0; k < 1000; ++k)
+  {
+    vi.step(linear(0.02, 0.01, 0.0), 0.001, false);
+    KDL::Frame lagging = vi.pose();
+    lagging.p -= KDL::Vector(0.001, 0.0, 0.0);  // the arm 1 mm behind
+    vi.setMeasured(lagging);
+  }
+  EXPECT_TRUE(vi.commanding());
+  EXPECT_EQ(vi.leadLimitedSteps(), 0u);
+  EXPECT_NEAR(vi.pose().p.x(), 0.02, 1e-9);
+}
+
+TEST(VelocityIntegratorResync, FaultResumesOnlyThroughClutchAtTheMeasuredPose)
+{
+  IntegratorParams p;
+  VelocityIntegrator vi(p);
+  ASSERT_TRUE(vi.start(KDL::Frame::Identity()));
+  vi.fault("console link stale");
+  EXPECT_FALSE(vi.commanding());
+  // the master keeps moving while the chain is held: nothing integrates
+  for (int k = 0; k < 100; ++k)
+    vi.step(linear(0.05, 0.0, 0.0), 0.001, false);
+  // the arm is somewhere else now (e.g. an arm controller restart)
+  const KDL::Frame arm(KDL::Vector(0.0134, 0.0, 0.0));
+  vi.setMeasured(arm);
+  EXPECT_FALSE(vi.clutch(false));  // a release without a press does not resume
+  EXPECT_FALSE(vi.commanding());
+  EXPECT_FALSE(vi.clutch(true));
+  EXPECT_EQ(vi.mode(), VelocityIntegrator::Mode::CLUTCHED);
+  EXPECT_TRUE(vi.clutch(false));
+  EXPECT_TRUE(vi.commanding());
+  // first set-point after recovery: the held (measured) pose, 0 mm jump
+  EXPECT_LT((vi.pose().p - arm.p).Norm(), 1e-12);
+  // then at most max_linear_velocity
+  vi.step(linear(5.0, 0.0, 0.0), 0.004, false);
+  EXPECT_NEAR((vi.pose().p - arm.p).Norm(), p.max_linear_velocity * 0.004, 1e-12);
+}
+
+TEST(VelocityIntegratorResync, RestartAwaitsClutchAndNormalClutchReanchors)
+{
+  IntegratorParams p;
+  VelocityIntegrator restarted(p);
+  ASSERT_TRUE(restarted.start(KDL::Frame::Identity(), true));
+  EXPECT_EQ(restarted.mode(), VelocityIntegrator::Mode::FAULT);
+  EXPECT_EQ(restarted.faults(), 1u);
+
+  VelocityIntegrator vi(p);
+  ASSERT_TRUE(vi.start(KDL::Frame::Identity()));
+  vi.step(linear(0.01, 0.0, 0.0), 0.1, false);  // set-point 1 mm ahead
+  vi.clutch(true);
+  vi.step(linear(0.01, 0.0, 0.0), 0.1, false);  // clutched: no motion
+  EXPECT_NEAR(vi.pose().p.x(), 0.001, 1e-12);
+  const KDL::Frame arm(KDL::Vector(0.0008, 0.0, 0.0));
+  vi.setMeasured(arm);
+  EXPECT_TRUE(vi.clutch(false));
+  EXPECT_NEAR(vi.pose().p.x(), 0.0008, 1e-12);
+  EXPECT_EQ(vi.faults(), 0u);
+  // non-finite measurements are refused and keep the last one
+  EXPECT_FALSE(vi.setMeasured(KDL::Frame(KDL::Vector(NAN, 0.0, 0.0))));
+  EXPECT_TRUE(vi.hasMeasured());
+}
+
+TEST(VelocityIntegratorResync, InvalidLeadParametersThrow)
+{
+  IntegratorParams p;
+  p.max_lead = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = IntegratorParams();
+  p.max_stall = std::nan("");
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+TEST(VelocityIntegratorResync, SpeedScaleReducesTheLimit)
+{
+  IntegratorParams p;
+  p.max_linear_velocity = 0.05;
+  VelocityIntegrator vi(p);
+  ASSERT_TRUE(vi.start(KDL::Frame::Identity()));
+  vi.setSpeedScale(0.2);
+  vi.setSpeedScale(0.0);  // ignored
+  EXPECT_DOUBLE_EQ(vi.speedScale(), 0.2);
+  vi.step(linear(1.0, 0.0, 0.0), 0.01, false);
+  EXPECT_NEAR(vi.pose().p.x(), 0.01 * 0.01, 1e-12);
 }

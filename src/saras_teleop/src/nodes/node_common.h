@@ -193,6 +193,19 @@ private:
   std::unique_ptr<Node> node_;
 };
 
+/**
+ * Restart detection for state that must not come back better than it was (tank energy, a
+ * commanding set-point): true if this node already ran under the current ROS master (its private
+ * parameter `~run_marker` exists, set here on every start; the master's parameter server outlives
+ * a respawned node or manager).
+ */
+inline bool restartedUnderThisMaster(const ros::NodeHandle& pnh)
+{
+  const bool before = pnh.hasParam("run_marker");
+  pnh.setParam("run_marker", true);
+  return before;
+}
+
 }  // namespace node
 }  // namespace saras_teleop
 

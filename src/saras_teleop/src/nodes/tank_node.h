@@ -20,6 +20,10 @@
  * ~input_timeout gets a zero action (only damping); non-finite inputs are rejected (counted) and
  * ignored. tank_slave defaults to require_measurement false: without a contact estimator the
  * interaction force is taken as zero (free motion) and the status says so (WARN).
+ * tank_slave gates every contact force (ForceGate: ~max_contact_force [N], ~max_contact_force_step
+ * [N] + ~max_contact_force_rate [N/s] * dt, non-finite): a violation zeroes the channel's action and
+ * measurement for ~contact_force_hold_time [s] (the arm holds) and is reported (ERROR, counters).
+ * A tank restarted under the same ROS master (respawn) starts at T_min, never with fresh energy.
  */
 #ifndef SARAS_TELEOP_TANK_NODE_H
 #define SARAS_TELEOP_TANK_NODE_H
@@ -37,6 +41,7 @@
 
 #include "node_common.h"
 #include "saras_teleop/energy_tank.h"
+#include "saras_teleop/force_gate.h"
 #include "saras_common/message_pool.h"
 
 namespace saras_teleop
@@ -54,6 +59,7 @@ struct MasterTraits
   static constexpr const char* kOutput = "tank_wrench";
   static constexpr bool kTriggerOnDesired = false;
   static constexpr bool kRequireMeasurement = true;
+  static constexpr bool kGateForce = false;
   static constexpr const char* kDampingUnit = "N s/m x3, N m s/rad x3";
   static Vector6d desired(const Desired& m) { return toVec(m.wrench); }
   static Vector6d conjugate(const Conjugate& m, double /*sign*/) { return toVec(m.twist); }
@@ -72,6 +78,7 @@ struct SlaveTraits
   static constexpr const char* kOutput = "tank_twist";
   static constexpr bool kTriggerOnDesired = true;
   static constexpr bool kRequireMeasurement = false;  // no contact estimator running = free motion
+  static constexpr bool kGateForce = true;            // plausibility gate of the contact force
   static constexpr const char* kDampingUnit = "m/(N s) x3, rad/(N m s) x3";
   static Vector6d desired(const Desired& m) { return toVec(m.twist); }
   /// Effort the tool exerts on the environment = sign * (force of the environment on the tool).
@@ -111,6 +118,22 @@ public:
     force_sign_ = prm.number("contact_force_sign", -1.0, "", { saras_common::inRange(-1.0, 1.0) });
     require_measurement_ = prm.flag("require_measurement", Traits::kRequireMeasurement);
     const std::vector<std::string> channels = paramChannels(prm);
+    ForceGateParams g;
+    if (Traits::kGateForce)
+    {
+      g.max_force = prm.number("max_contact_force", g.max_force, "N", { positive() });
+      g.max_step = prm.number("max_contact_force_step", g.max_step, "N", { positive() });
+      g.max_rate = prm.number("max_contact_force_rate", g.max_rate, "N/s", { positive() });
+      g.hold_time = prm.number("contact_force_hold_time", g.hold_time, "s", { positive() });
+    }
+    g.timeout = input_timeout_;
+    if (restartedUnderThisMaster(pnh))
+    {
+      // a respawned tank must not come back with more energy than it had: start empty (T_min)
+      ROS_WARN("%s: restarted under the same ROS master: tank starts at T_min %.2f J (not T_init %.2f J)",
+               Traits::kName, p.T_min, p.T_init);
+      p.T_init = std::nextafter(p.T_min, p.T_max);  // TankParams requires T_init > T_min
+    }
     p.validate();  // the order of the energy levels (throws naming the parameter)
     tank_.reset(new EnergyTank(p, channels.size()));
     if (p.bypass)
@@ -122,6 +145,8 @@ public:
     {
       Port& pt = ports_[i];
       pt.name = channels[i];
+      if (Traits::kGateForce)
+        pt.gate.reset(new ForceGate(g));
       typename Traits::Output proto;
       proto.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
       pt.pool.reset(new MessagePool<typename Traits::Output>(kPoolSize, proto));
@@ -156,6 +181,7 @@ private:
     ros::Time t_des, t_conj;  // arrival times (ROS clock)
     ros::Time stamp;          // header stamp propagated to the output
     Vector6d des = Vector6d::Zero(), conj = Vector6d::Zero();
+    std::unique_ptr<ForceGate> gate;  // tank_slave: contact-force plausibility
   };
 
   void onDesired(std::size_t i, const typename Traits::Desired& m)
@@ -185,8 +211,14 @@ private:
       return;
     }
     ++received_;
-    ports_[i].conj = v;
-    ports_[i].t_conj = ros::Time::now();
+    Port& pt = ports_[i];
+    if (pt.gate && pt.gate->offer(v.head<3>(), ros::Time::now().toSec()) != ForceGate::Verdict::ACCEPTED)
+    {
+      reject("implausible contact force on " + pt.name + " (" + pt.gate->lastViolation() + "): holding");
+      return;
+    }
+    pt.conj = v;
+    pt.t_conj = ros::Time::now();
     if (!Traits::kTriggerOnDesired)
     {
       ports_[i].stamp = Traits::stamp(m);
@@ -241,7 +273,10 @@ private:
       // no trustworthy measurement -> the power of the action cannot be accounted -> no action
       // (unless ~require_measurement is false: the slave then assumes free motion)
       const bool measured = fresh_conj || !require_measurement_;
-      tank_->setDesired(i, (fresh_des && measured) ? pt.des : Vector6d::Zero());
+      const bool gated = pt.gate && pt.gate->holding(now.toSec());  // implausible force: hold the arm
+      if (gated)
+        tank_->setConjugate(i, Vector6d::Zero());
+      tank_->setDesired(i, (fresh_des && measured && !gated) ? pt.des : Vector6d::Zero());
     }
     const double pin = inbox_ / dt;
     inbox_ = 0.0;
@@ -296,7 +331,18 @@ private:
   void report(diagnostic_updater::DiagnosticStatusWrapper& s)
   {
     using diagnostic_msgs::DiagnosticStatus;
-    if (stale_ && require_measurement_)
+    std::size_t violations = 0;
+    std::string gated;
+    for (const Port& pt : ports_)
+      if (pt.gate)
+      {
+        violations += pt.gate->violations();
+        if (pt.gate->holding(ros::Time::now().toSec()))
+          gated += (gated.empty() ? "" : ", ") + pt.name + " (" + pt.gate->lastViolation() + ")";
+      }
+    if (!gated.empty())
+      s.summary(DiagnosticStatus::ERROR, "implausible contact force, holding: " + gated);
+    else if (stale_ && require_measurement_)
       s.summary(DiagnosticStatus::STALE, "measurement inputs stale: actions zeroed");
     else if (stale_)
       s.summary(DiagnosticStatus::WARN, "no interaction-force measurement: assuming free motion");
@@ -316,6 +362,8 @@ private:
     s.add("output rate [Hz]", published_.rate());
     s.add("received", received_);
     s.add("rejected", rejected_);
+    if (Traits::kGateForce)
+      s.add("contact force violations", violations);
   }
 
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)

@@ -2,8 +2,9 @@
  * velocity_integrator: slave pose set-point from the implemented slave twist (one per channel).
  * Nodelet saras_teleop/VelocityIntegrator; executable velocity_integrator.
  *
- * Waits for the slave start pose on start_pose (PoseStamped; error after ~start_timeout, keeps
- * waiting without publishing), then integrates tank_twist (TwistStamped, slave base frame) with
+ * Waits for the slave start pose on start_pose (PoseStamped, the arm's MEASURED pose; error after
+ * ~start_timeout, keeps waiting without publishing) and keeps reading it (re-anchoring, lead limit,
+ * VelocityIntegrator), then integrates tank_twist (TwistStamped, slave base frame) with
  * KDL::addDelta over the interval between the header stamps of consecutive twists, i.e. the master
  * sample times propagated through the chain: sum v_k (t_k - t_{k-1}) reproduces the scaled master
  * displacement regardless of transport jitter (integrating over arrival times loses or adds motion
@@ -13,6 +14,15 @@
  * A ~rate timer republishes the held set-point if twists stop. Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
  * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
  * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
+ *
+ * Faults (FAULT: the set-point freezes, <= max_lead from the measured pose; cleared only by the
+ * operator's clutch on device_state (HapticDeviceState): press, release -> re-anchored on the
+ * measured pose): console link STALE; measured pose older than ~measured_timeout; no twist for
+ * ~fault_timeout after twists had flowed; set-point lead saturated (~max_lead) for ~max_stall;
+ * a restart under the same ROS master (~await_clutch_on_restart). Before the first step integrated
+ * with the link up (start-up) these are plain holds, not faults. Collision monitoring
+ * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
+ * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  */
 #include <string>
 
@@ -20,7 +30,9 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/TwistStamped.h>
 #include <pluginlib/class_list_macros.hpp>
+#include <saras_msgs/CollisionReport.h>
 #include <saras_msgs/ComponentStatus.h>
+#include <saras_msgs/HapticDeviceState.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "node_common.h"
@@ -46,6 +58,8 @@ IntegratorParams readParams(const ros::NodeHandle& pnh)
   };
   p.workspace_min = box("workspace_min", p.workspace_min);
   p.workspace_max = box("workspace_max", p.workspace_max);
+  p.max_lead = prm.number("max_lead", p.max_lead, "m", { saras_common::positive() });
+  p.max_stall = prm.number("max_stall", p.max_stall, "s", { saras_common::positive() });
   p.validate();  // min < max (throws naming the parameter)
   return p;
 }
@@ -64,6 +78,13 @@ public:
     start_timeout_ = prm.number("start_timeout", 10.0, "s", { positive() });
     input_timeout_ = prm.number("input_timeout", 0.05, "s", { positive() });
     max_step_ = prm.number("max_step", 0.05, "s", { positive() });
+    measured_timeout_ = prm.number("measured_timeout", 0.5, "s", { positive() });
+    fault_timeout_ = prm.number("fault_timeout", 0.5, "s", { positive() });
+    collision_timeout_ = prm.number("collision_timeout", 0.5, "s", { positive() });
+    collision_loss_ = prm.text("collision_loss", "slow", { saras_common::oneOf({ "hold", "slow", "ignore" }) });
+    collision_scale_ =
+        prm.number("collision_loss_speed_scale", 0.2, "", { positive(), saras_common::inRange(0.0, 1.0) });
+    await_clutch_ = prm.flag("await_clutch_on_restart", true) && restartedUnderThisMaster(pnh);
     frame_ = prm.text("frame_id", "mesa_left/sbs_world", { saras_common::nonEmpty() });
     tf_.header.frame_id = frame_;
     geometry_msgs::PoseStamped pose;
@@ -77,6 +98,8 @@ public:
     start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
+    device_sub_ = nh.subscribe("device_state", 10, &VelocityIntegratorNode::onDevice, this, fast);
+    collision_sub_ = nh.subscribe("collision_report", 2, &VelocityIntegratorNode::onCollision, this);
     t0_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &VelocityIntegratorNode::onTimer, this);
     health_.reset(new Health(nh, pnh, name, "set-point",
@@ -84,25 +107,86 @@ public:
   }
 
 private:
+  /// Measured slave pose: the start pose, then continuously (re-anchoring, lead limit)
   void onStart(const geometry_msgs::PoseStamped::ConstPtr& m)
   {
     const auto& p = m->pose.position;
     const auto& q = m->pose.orientation;
     const double qn = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-    if (!(std::isfinite(qn) && std::fabs(qn - 1.0) < 1e-3) ||
-        !vi_.start(KDL::Frame(KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w), KDL::Vector(p.x, p.y, p.z))))
+    const KDL::Frame f(KDL::Rotation::Quaternion(q.x, q.y, q.z, q.w), KDL::Vector(p.x, p.y, p.z));
+    if (!(std::isfinite(qn) && std::fabs(qn - 1.0) < 1e-3) || !vi_.setMeasured(f))
     {
       ++rejected_;
-      ROS_ERROR_THROTTLE(1.0, "velocity_integrator: invalid start pose rejected (non-finite or non-unit quaternion)");
+      ROS_ERROR_THROTTLE(1.0, "velocity_integrator: invalid measured pose rejected (non-finite or non-unit quaternion)");
       return;
     }
-    start_sub_.shutdown();
+    t_measured_ = ros::Time::now();
+    if (vi_.started())
+      return;
+    vi_.start(f, await_clutch_);
     ROS_INFO("velocity_integrator: start pose received, integrating in %s", frame_.c_str());
+    if (await_clutch_)
+      ROS_WARN("velocity_integrator: restarted; holding until the operator presses and releases the clutch");
   }
 
   void onLink(const saras_msgs::ComponentStatus::ConstPtr& m)
   {
     link_ok_ = m->level != saras_msgs::ComponentStatus::STALE;
+    if (!link_ok_)
+      fault("console link stale");
+  }
+
+  void onDevice(const saras_msgs::HapticDeviceState::ConstPtr& m)
+  {
+    if (m->stale)
+      return;
+    const bool was_fault = vi_.faults() > clutch_faults_;
+    if (vi_.clutch(m->clutch) && was_fault)
+    {
+      clutch_faults_ = vi_.faults();
+      ROS_INFO("velocity_integrator: clutch released after a hold: re-anchored on the measured pose, %.2f mm from "
+               "the last commanded set-point; following",
+               1e3 * (vi_.pose().p - last_sent_).Norm());
+    }
+  }
+
+  void onCollision(const saras_msgs::CollisionReport::ConstPtr&)
+  {
+    t_collision_ = ros::Time::now();
+  }
+
+  void fault(const std::string& why)
+  {
+    // start-up (console, arm state and twists not all up yet) is a hold, not a fault
+    if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started() || !engaged_)
+      return;
+    vi_.fault(why);
+    ROS_ERROR("velocity_integrator: HOLD (%s): set-point frozen, the arm holds until the operator presses and "
+              "releases the clutch",
+              why.c_str());
+  }
+
+  /// Timer-side supervision: stale measurement, twist stream gone, collision monitoring gone.
+  void supervise(const ros::Time& now)
+  {
+    if (!t_measured_.isZero() && (now - t_measured_).toSec() > measured_timeout_)
+      fault("arm state stale (no measured pose)");
+    if (!t_twist_.isZero() && (now - t_twist_).toSec() > fault_timeout_)
+      fault("no twist from the teleoperation chain");
+    const bool collision_lost = collision_loss_ != "ignore" && (now - t0_).toSec() > start_timeout_ &&
+                                (t_collision_.isZero() || (now - t_collision_).toSec() > collision_timeout_);
+    if (collision_lost != collision_lost_)
+    {
+      collision_lost_ = collision_lost;
+      if (collision_lost)
+        ROS_ERROR("velocity_integrator: collision monitoring lost (no collision_report for %.2f s): %s",
+                  collision_timeout_, collision_loss_ == "hold" ? "holding" : "reduced speed");
+      else
+        ROS_WARN("velocity_integrator: collision monitoring back");
+    }
+    vi_.setSpeedScale(collision_lost && collision_loss_ == "slow" ? collision_scale_ : 1.0);
+    if (collision_lost && collision_loss_ == "hold")
+      fault("collision monitoring lost");
   }
 
   void onTwist(const geometry_msgs::TwistStamped::ConstPtr& m)
@@ -124,7 +208,10 @@ private:
     {
       const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
       if (dt > 0.0 && dt <= max_step_)
+      {
         vi_.step(v, dt, hold_);  // this twist held over the sample interval it represents
+        engaged_ = engaged_ || (!hold_ && vi_.commanding());
+      }
       if (dt > 0.0 || last_stamp_.isZero() || dt < -max_step_)
         last_stamp_ = stamp;
     }
@@ -134,13 +221,14 @@ private:
   void publish(const ros::Time& stamp)
   {
     if (!vi_.started())
-      return;
+      return;  // FAULT / CLUTCHED: the held set-point (the measured pose at the fault) is published
     const KDL::Frame& f = vi_.pose();
     const boost::shared_ptr<geometry_msgs::PoseStamped> pose = pose_pool_->next();  // zero-copy in a manager
     pose->header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
     pose->pose.position.x = f.p.x();
     pose->pose.position.y = f.p.y();
     pose->pose.position.z = f.p.z();
+    last_sent_ = f.p;
     f.M.GetQuaternion(pose->pose.orientation.x, pose->pose.orientation.y, pose->pose.orientation.z,
                       pose->pose.orientation.w);
     pose_pub_.publish(pose);
@@ -172,6 +260,7 @@ private:
     }
     if (t_twist_.isZero() || (now - t_twist_).toSec() > input_timeout_)
       hold_ = true;  // no twist stream: the set-point is frozen
+    supervise(now);
     if (t_pub_.isZero() || (now - t_pub_).toSec() > 1.5 * period_)
       publish(ros::Time());
   }
@@ -184,6 +273,14 @@ private:
     if (!vi_.started())
       s.summary((now - t0_).toSec() > start_timeout_ ? DiagnosticStatus::ERROR : DiagnosticStatus::WARN,
                 "no slave start pose");
+    else if (vi_.mode() == VelocityIntegrator::Mode::FAULT)
+      s.summary(DiagnosticStatus::ERROR, "HOLD: " + vi_.faultReason() + "; resume: press and release the clutch");
+    else if (collision_lost_)
+      s.summary(collision_loss_ == "ignore" ? DiagnosticStatus::WARN : DiagnosticStatus::ERROR,
+                "collision monitoring lost: " +
+                    std::string(collision_loss_ == "slow" ? "reduced speed" : "not supervised"));
+    else if (vi_.mode() == VelocityIntegrator::Mode::CLUTCHED)
+      s.summary(DiagnosticStatus::OK, "clutch: holding, re-anchors on release");
     else if (hold_)
       s.summary(DiagnosticStatus::STALE, "holding: master link stale or no twist");
     else
@@ -191,6 +288,12 @@ private:
     s.add("input age [s]", t_twist_.isZero() ? 1e6 : std::min((now - t_twist_).toSec(), 1e6));
     s.add("target_pose rate [Hz]", published_.rate());
     s.add("link ok", link_ok_);
+    s.add("measured pose age [s]", t_measured_.isZero() ? 1e6 : std::min((now - t_measured_).toSec(), 1e6));
+    s.add("set-point lead [mm]", 1e3 * vi_.lead());
+    s.add("lead-limited steps", vi_.leadLimitedSteps());
+    s.add("faults", vi_.faults());
+    s.add("collision monitoring", collision_lost_ ? "lost" : "ok");
+    s.add("speed scale", vi_.speedScale());
     s.add("received", received_);
     s.add("rejected", rejected_);
   }
@@ -200,6 +303,12 @@ private:
   RateMeter published_;
   tf2_ros::TransformBroadcaster broadcaster_;
   double period_ = 0.001, start_timeout_ = 10.0, input_timeout_ = 0.05, max_step_ = 0.05;
+  double measured_timeout_ = 0.5, fault_timeout_ = 0.5, collision_timeout_ = 0.5, collision_scale_ = 0.2;
+  KDL::Vector last_sent_;  // position of the last published set-point
+  std::size_t clutch_faults_ = 0;  // faults already cleared by a clutch
+  std::string collision_loss_ = "slow";
+  bool await_clutch_ = false, collision_lost_ = false;
+  bool engaged_ = false;  // integrated once with the link up: holds from now on are faults
   std::string frame_;
   unsigned tf_decimation_ = 10;
   unsigned long count_ = 0;
@@ -209,9 +318,9 @@ private:
   std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;
   ros::Publisher pose_pub_;
-  ros::Subscriber start_sub_, twist_sub_, link_sub_;
+  ros::Subscriber start_sub_, twist_sub_, link_sub_, device_sub_, collision_sub_;
   ros::SteadyTimer timer_;
-  ros::Time t0_, t_twist_, t_pub_, last_stamp_;
+  ros::Time t0_, t_twist_, t_pub_, last_stamp_, t_measured_, t_collision_;
   uint64_t received_ = 0, rejected_ = 0;
 };
 

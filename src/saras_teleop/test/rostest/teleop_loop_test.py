@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Closed-loop rostest of the real teleop nodes with a fake master (TF touch_left/stylus moving on a
 sinusoid) and a fake SARAS arm (ee_pose = last target_pose). Checks tracking of the scaled master in
-the slave base frame, the force command, tank energies, bad-input robustness and the stale-link hold.
+the slave base frame, the force command, tank energies, bad-input robustness, the stale-link hold
+(resumed only through the operator's clutch, from the held pose), the contact-force gate (1e6 N
+holds the arm) and the degradation when collision monitoring (/collision/report) goes silent.
 Parameters (~): expect_delay [s] (one-way channel delay configured in the .test), check_stale (bool),
 expect_manager (nodelet manager that must hold every teleop nodelet; '' = do not check)."""
 import math
@@ -17,7 +19,7 @@ import rostest
 import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, WrenchStamped
-from saras_msgs.msg import ComponentStatus
+from saras_msgs.msg import CollisionReport, ComponentStatus, HapticDeviceState
 from std_msgs.msg import Float64
 
 AMP = 0.02    # master stroke along touch_left/base x [m]
@@ -57,6 +59,7 @@ class Fixture(object):
         self.master_log = []       # (time, x in touch base)
         self.stale = False
         self.nan_stylus = False
+        self.collision = True      # publish /collision/report (collision monitoring alive)
         self.br = tf2_ros.TransformBroadcaster()
         self.static_br = tf2_ros.StaticTransformBroadcaster()
         self.static_br.sendTransform([self.static(*f) for f in STATIC_FRAMES])
@@ -64,6 +67,8 @@ class Fixture(object):
         self.status_pub = rospy.Publisher('/touchball/status', ComponentStatus, queue_size=10)
         self.force_pub = rospy.Publisher('/mesa_left/contact_force', Twist, queue_size=10)
         self.tank_pub = rospy.Publisher('/teleop/left/tank_wrench', WrenchStamped, queue_size=10)
+        self.device_pub = rospy.Publisher('/touchball/left/state', HapticDeviceState, queue_size=10)
+        self.collision_pub = rospy.Publisher('/collision/report', CollisionReport, queue_size=10)
         rospy.Subscriber('/mesa_left/target_pose', PoseStamped, self.on_target, tcp_nodelay=True)
         rospy.Subscriber('/touchball/left/wrench_cmd', WrenchStamped, self.on_wrench, tcp_nodelay=True)
         rospy.Subscriber('/teleop/tank_master/energy', Float64, lambda m: self.on_energy('master', m))
@@ -137,7 +142,23 @@ class Fixture(object):
                 st.component = 'touchball_receiver'
                 st.level = ComponentStatus.STALE if self.stale else ComponentStatus.OK
                 self.status_pub.publish(st)
+            if k % 12 == 0 and self.collision:
+                self.collision_pub.publish(CollisionReport())
             r.sleep()
+
+    def clutch(self):
+        """The operator presses the clutch for 0.2 s and releases it; returns the release time."""
+        for pressed in (True, False):
+            m = HapticDeviceState()
+            m.device = 'left'
+            m.clutch = pressed
+            for _ in range(10):
+                m.header.stamp = rospy.Time.now()
+                self.device_pub.publish(m)
+                time.sleep(0.02)
+            if pressed:
+                release = time.time()
+        return release
 
 
 class TeleopLoopTest(unittest.TestCase):
@@ -256,10 +277,48 @@ class TeleopLoopTest(unittest.TestCase):
         ys = [t[3] for t in held]
         self.assertLess(max(ys) - min(ys), 1e-9)
         fx.stale = False
+        time.sleep(1.5)
+        with fx.lock:
+            still = [t[2:5] for t in fx.targets[n0:]]
+        # link back, but no clutch yet: still held (resumes only through the operator's clutch)
+        self.assertLess(max(abs(p[1] - still[0][1]) for p in still), 1e-9)
+        held = still[-1]
+        release = fx.clutch()
         time.sleep(2.0)
         with fx.lock:
-            moving = [t[3] for t in fx.targets[-1000:]]
-        self.assertGreater(max(moving) - min(moving), 1e-3)  # resumed (re-indexed, no jump check below)
+            after = [t[2:5] for t in fx.targets if t[0] > release]
+        self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
+        first = after[0]
+        self.assertLess(math.dist(first, held), 1e-3)  # first set-point after recovery: the held pose
+        steps = [math.dist(a, b) for a, b in zip(after, after[1:])]
+        self.assertLess(max(steps), 1e-3)            # no jump on the way
+
+        # contact force of 1e6 N (spoofed or faulty): the set-point does not move while it lasts
+        tw = Twist()
+        tw.linear.z = 1e6
+        with fx.lock:
+            n1 = len(fx.targets)
+        end = time.time() + 2.0
+        while time.time() < end:
+            fx.force_pub.publish(tw)
+            time.sleep(1.0 / 60)
+        with fx.lock:
+            spoofed = [t[2:5] for t in fx.targets[n1 + 50:]]  # from 0.2 s in (gate reaction + queue)
+        self.assertGreater(len(spoofed), 100)
+        self.assertLess(max(math.dist(p, spoofed[0]) for p in spoofed), 2e-4)
+        time.sleep(1.0)
+        with fx.lock:
+            gate = [(l, v) for n, l, _h, v in fx.status if n == 'teleop/tank_slave/tank_slave: energy tank'
+                    and int(v.get('contact force violations', '0')) > 0]
+        self.assertTrue(gate, 'contact-force violations not reported on /diagnostics')
+
+        # collision monitoring gone: reported, and the set-point slows to 20 % of the limit
+        fx.collision = False
+        time.sleep(1.5)
+        with fx.lock:
+            lost = [v for n, l, _h, v in fx.status[-200:] if n == 'teleop/left/velocity_integrator: set-point'
+                    and v.get('collision monitoring') == 'lost']
+        self.assertTrue(lost, 'loss of collision monitoring not reported on /diagnostics')
         fx.run = False
 
     def test_nodelets_share_one_manager(self):

@@ -1,0 +1,89 @@
+"""Plausibility checks of the targets the SARAS arm driver forwards to the robot (ROS-agnostic).
+
+The driver is the last software stage before the arm, so it checks every target itself instead of
+trusting whichever ROS publisher sent it:
+
+* stamp: a zero stamp, a stamp in the future (beyond ``max_future``) or older than ``max_age`` is a
+  rejection, never a bypass of the age check;
+* workspace: the position must lie in the box ``workspace_min`` .. ``workspace_max`` [m];
+* speed: a target may move at most ``max_speed * dt + step_tolerance`` [m] from the last forwarded
+  one, dt the time between them [s];
+* re-synchronisation: the first target after a gap longer than ``resync_gap`` [s] (start, hold,
+  reconnection, see :meth:`CommandGuard.reset`) must lie within ``max_jump`` [m] of the arm's
+  measured position (fresher than ``measured_timeout``); no measured position => rejected (unless
+  ``require_measurement`` is False: link tests without a state stream; the speed limit still applies).
+
+A rejected target is not forwarded: the arm holds its last target. Times are monotonic seconds.
+"""
+
+import math
+
+REASONS = ('zero_stamp', 'future_stamp', 'stale', 'workspace', 'speed', 'jump', 'no_measurement')
+
+
+class CommandGuard(object):
+    def __init__(self, workspace_min, workspace_max, max_speed, max_jump, resync_gap=0.25,
+                 max_age=0.1, max_future=0.02, step_tolerance=0.0005, measured_timeout=0.25,
+                 require_measurement=True):
+        if len(workspace_min) != 3 or len(workspace_max) != 3 or \
+                not all(lo < hi for lo, hi in zip(workspace_min, workspace_max)):
+            raise ValueError('workspace_min/workspace_max: 3 values each, min < max on every axis [m]')
+        for name, v in (('max_target_speed', max_speed), ('max_resync_jump', max_jump),
+                        ('resync_gap', resync_gap), ('max_target_age', max_age),
+                        ('max_future', max_future), ('step_tolerance', step_tolerance),
+                        ('measured_timeout', measured_timeout)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError('%s must be a positive finite number' % name)
+        self.lo, self.hi = tuple(workspace_min), tuple(workspace_max)
+        self.max_speed, self.max_jump = float(max_speed), float(max_jump)
+        self.resync_gap, self.max_age, self.max_future = resync_gap, max_age, max_future
+        self.tol, self.measured_timeout = step_tolerance, measured_timeout
+        self.require_measurement = bool(require_measurement)
+        self.last = None            # (t, position) of the last forwarded target
+        self.meas = None            # (t, position) of the last measured position
+        self.rejected = dict((r, 0) for r in REASONS)
+        self.last_reason = ''
+
+    def measured(self, position, t):
+        if all(math.isfinite(x) for x in position):
+            self.meas = (t, tuple(position))
+
+    def reset(self):
+        """Next target is a re-synchronisation (call on every (re)connection)."""
+        self.last = None
+
+    def check(self, position, stamp_age, now):
+        """``(True, '')`` if the target may be forwarded, else ``(False, reason)`` (counted).
+
+        :param stamp_age: now - header stamp [s], ``None`` for a zero stamp
+        """
+        reason = self._reason(position, stamp_age, now)
+        if reason:
+            self.rejected[reason] += 1
+            self.last_reason = reason
+            return False, reason
+        return True, ''
+
+    def sent(self, position, now):
+        """Record a forwarded target."""
+        self.last = (now, tuple(position))
+
+    def _reason(self, p, age, now):
+        if age is None:
+            return 'zero_stamp'
+        if age < -self.max_future:
+            return 'future_stamp'
+        if age > self.max_age:
+            return 'stale'
+        if not all(lo <= x <= hi for x, lo, hi in zip(p, self.lo, self.hi)):
+            return 'workspace'
+        if self.last is not None and now - self.last[0] <= self.resync_gap:
+            allowed = self.max_speed * max(0.0, now - self.last[0]) + self.tol
+            return 'speed' if _dist(p, self.last[1]) > allowed else ''
+        if self.meas is None or now - self.meas[0] > self.measured_timeout:
+            return 'no_measurement' if self.require_measurement else ''
+        return 'jump' if _dist(p, self.meas[1]) > self.max_jump else ''
+
+
+def _dist(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
