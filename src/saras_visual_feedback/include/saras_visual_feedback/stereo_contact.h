@@ -53,7 +53,7 @@ struct StereoCalibration
 /// Estimator parameters (config/stereo_contact.yaml).
 struct StereoContactParams
 {
-  double patch_radius = 0.008;   ///< [m] tissue patch fitted around the tip
+  double patch_radius = 0.012;   ///< [m] tissue patch fitted around the tip
   double near_margin = 0.02;     ///< [m] surface searched up to this much closer to the camera than the tip
   double far_margin = 0.03;      ///< [m] ... and up to this much farther
   int block_size = 9;            ///< [px] matching window (odd, 5..31) at 1280 px width, scaled with fx
