@@ -46,6 +46,37 @@ struct Sample
 {
   float r, g, x, y;  ///< residual, right gradient, normalised coordinates
 };
+/// Residuals and right gradients of the unmasked ROI pixels (every @p stride px) under @p s.
+void residuals(const StereoRegion& g, const cv::Mat& left, const cv::Mat& right, const cv::Mat& grad,
+               const DisparitySurface& s, double offset, int stride, std::vector<Sample>* samples,
+               std::vector<float>* abs_r)
+{
+  samples->clear();
+  abs_r->clear();
+  const int lx0 = g.roi.x - g.origin_left.x, ly0 = g.roi.y - g.origin_left.y;
+  for (int y = ly0; y < ly0 + g.roi.height; y += stride)
+  {
+    const float* l = left.ptr<float>(y);
+    const float* r = right.ptr<float>(y);
+    const float* gr = grad.ptr<float>(y);
+    const std::uint8_t* ml = g.mask_left.ptr<std::uint8_t>(y);
+    const std::uint8_t* mr = g.mask_right.ptr<std::uint8_t>(y);
+    const double v = y + g.origin_left.y;
+    for (int x = lx0; x < lx0 + g.roi.width; x += stride)
+    {
+      if (ml[x])
+        continue;
+      const double u = x + g.origin_left.x;
+      const double xr = u - s(u, v) - g.origin_right.x;
+      if (!(xr >= 0.0 && xr < right.cols - 1) || mr[static_cast<int>(xr + 0.5)])
+        continue;
+      const float res = static_cast<float>(l[x] - sampleRow(r, xr) - offset);
+      samples->push_back({res, sampleRow(gr, xr), static_cast<float>((u - s.u0) / s.s),
+                          static_cast<float>((v - s.v0) / s.s)});
+      abs_r->push_back(std::abs(res));
+    }
+  }
+}
 }  // namespace
 
 int fitDisparityPlane(const std::vector<cv::Point3f>& samples, double threshold, int iterations,
@@ -94,33 +125,9 @@ RefineResult refineDisparity(const StereoRegion& g, int stride, int iterations, 
   std::vector<Sample> samples;
   std::vector<float> abs_r;
   double offset = 0.0;  // left - right intensity
-  const int lx0 = g.roi.x - g.origin_left.x, ly0 = g.roi.y - g.origin_left.y;
   for (int it = 0; it < iterations; ++it)
   {
-    samples.clear();
-    abs_r.clear();
-    for (int y = ly0; y < ly0 + g.roi.height; y += stride)
-    {
-      const float* l = left.ptr<float>(y);
-      const float* r = right.ptr<float>(y);
-      const float* gr = grad.ptr<float>(y);
-      const std::uint8_t* ml = g.mask_left.ptr<std::uint8_t>(y);
-      const std::uint8_t* mr = g.mask_right.ptr<std::uint8_t>(y);
-      const double v = y + g.origin_left.y;
-      for (int x = lx0; x < lx0 + g.roi.width; x += stride)
-      {
-        if (ml[x])
-          continue;
-        const double u = x + g.origin_left.x;
-        const double xr = u - (*s)(u, v) - g.origin_right.x;
-        if (!(xr >= 0.0 && xr < right.cols - 1) || mr[static_cast<int>(xr + 0.5)])
-          continue;
-        const float res = static_cast<float>(l[x] - sampleRow(r, xr) - offset);
-        samples.push_back({res, sampleRow(gr, xr), static_cast<float>((u - s->u0) / s->s),
-                           static_cast<float>((v - s->v0) / s->s)});
-        abs_r.push_back(std::abs(res));
-      }
-    }
+    residuals(g, left, right, grad, *s, offset, stride, &samples, &abs_r);
     if (samples.size() < 50)
       return out;
     // Tukey biweight, scale from the median absolute residual.

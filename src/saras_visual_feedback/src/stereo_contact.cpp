@@ -123,6 +123,27 @@ int largestGap(const std::vector<cv::Point3d>& pts, const std::vector<int>& idx,
   }
   return best;
 }
+/// Surface point of @p f closest to @p tl (local frame), by iterated tangent-plane projection:
+/// signed distance, outward normal and point (camera frame) into @p out.
+void closestPoint(const HeightField& f, const cv::Vec3d& tl, ContactEstimate* out)
+{
+  double u = tl[0], v = tl[1];
+  cv::Vec3d nl;
+  for (int k = 0; k < 4; ++k)
+  {
+    nl = cv::Vec3d(-f.hu(u, v), -f.hv(u, v), 1.0);
+    nl /= cv::norm(nl);
+    const cv::Vec3d q = tl - nl * nl.dot(tl - cv::Vec3d(u, v, f.h(u, v)));
+    u = q[0];
+    v = q[1];
+  }
+  const cv::Vec3d s(u, v, f.h(u, v));
+  out->signed_distance = nl.dot(tl - s);
+  const cv::Vec3d n_cam = f.e1 * nl[0] + f.e2 * nl[1] + f.e3 * nl[2];
+  out->normal = n_cam / cv::norm(n_cam);
+  out->surface = f.origin + cv::Point3d(f.e1 * s[0] + f.e2 * s[1] + f.e3 * s[2]);
+}
+
 /// Largest run of consecutive empty sectors (of kSectors) of the matching inliers around the tip pixel.
 int largestImageGap(const std::vector<cv::Point3f>& samples, const DisparitySurface& ds, const cv::Point2d& tip)
 {
@@ -454,23 +475,7 @@ bool StereoContactEstimator::fitSurface(const cv::Point3d& tip, ContactEstimate*
     out->unknown = ContactUnknown::kOccluded;  // surface on one side only: the tip's is a guess
     return false;
   }
-  // Closest surface point: iterated projection on the tangent plane.
-  double u = tl[0], v = tl[1];
-  cv::Vec3d nl;
-  for (int k = 0; k < 4; ++k)
-  {
-    nl = cv::Vec3d(-f.hu(u, v), -f.hv(u, v), 1.0);
-    nl /= cv::norm(nl);
-    const cv::Vec3d s(u, v, f.h(u, v));
-    const cv::Vec3d q = tl - nl * nl.dot(tl - s);
-    u = q[0];
-    v = q[1];
-  }
-  const cv::Vec3d s(u, v, f.h(u, v));
-  out->signed_distance = nl.dot(tl - s);
-  const cv::Vec3d n_cam = f.e1 * nl[0] + f.e2 * nl[1] + f.e3 * nl[2];
-  out->normal = n_cam / cv::norm(n_cam);
-  out->surface = f.origin + cv::Point3d(f.e1 * s[0] + f.e2 * s[1] + f.e3 * s[2]);
+  closestPoint(f, tl, out);
   out->confidence = quadric ? 1.0 : 0.5;  // scaled by the matching's inlier ratio by the caller
   return true;
 }
@@ -500,6 +505,20 @@ void StereoContactEstimator::matchRegion(const cv::Mat& left, const cv::Mat& rig
   matcher_->compute(strip_left_, strip_right_, disparity_);
   *shift_out = shift;
   *num_disp_out = num_disp;
+}
+
+RefineResult StereoContactEstimator::refine(const cv::Rect& roi, int shift, int num_disp, int step, bool quadric,
+                                            DisparitySurface* ds)
+{
+  StereoRegion region;
+  strip_left_.convertTo(region.left, CV_32F);
+  strip_right_.convertTo(region.right, CV_32F);
+  region.mask_left = mask_left_;
+  region.mask_right = mask_right_;
+  region.origin_left = cv::Point(roi.x - num_disp, roi.y);
+  region.origin_right = cv::Point(roi.x - num_disp - shift, roi.y);
+  region.roi = roi;
+  return refineDisparity(region, step, p_.refine_iterations, quadric, ds);
 }
 
 ContactEstimate StereoContactEstimator::estimate(const cv::Mat& left, const cv::Mat& right,
@@ -562,15 +581,7 @@ ContactEstimate StereoContactEstimator::estimate(const cv::Mat& left, const cv::
     out.unknown = ContactUnknown::kOccluded;  // surface on one side of the tip only: a guess
     return out;
   }
-  StereoRegion region;
-  strip_left_.convertTo(region.left, CV_32F);
-  strip_right_.convertTo(region.right, CV_32F);
-  region.mask_left = mask_left_;
-  region.mask_right = mask_right_;
-  region.origin_left = cv::Point(roi.x - num_disp, roi.y);
-  region.origin_right = cv::Point(roi.x - num_disp - shift, roi.y);
-  region.roi = roi;
-  const RefineResult refined = refineDisparity(region, step, p_.refine_iterations, gap < kSectors / 2, &ds);
+  const RefineResult refined = refine(roi, shift, num_disp, step, gap < kSectors / 2, &ds);
   out.photometric_rms = refined.rms;
   surfacePoints(ds, roi, num_disp, step);
   if (static_cast<int>(points_.size()) < p_.min_points / 2 || !fitSurface(tip, &out))

@@ -37,6 +37,7 @@
 namespace saras_visual_feedback
 {
 struct DisparitySurface;
+struct RefineResult;
 }
 
 namespace saras_visual_feedback
@@ -159,6 +160,8 @@ private:
   bool rectifyStrips(const cv::Mat& left, const cv::Mat& right, const cv::Rect& roi, int shift, int num_disp);
   void maskShafts(const InstrumentView* tools, std::size_t n, const cv::Rect& roi, int shift, int num_disp);
   int collectSamples(const cv::Rect& roi, int shift, int num_disp, int step, int* unmasked);
+  /// Photometric refinement of @p ds on the strips of the last matchRegion().
+  RefineResult refine(const cv::Rect& roi, int shift, int num_disp, int step, bool quadric, DisparitySurface* ds);
   void surfacePoints(const DisparitySurface& ds, const cv::Rect& roi, int num_disp, int step);
   bool fitSurface(const cv::Point3d& tip, ContactEstimate* out);
 
