@@ -36,8 +36,8 @@ trap cleanup EXIT
 # stop_pid PID NAME [FILE]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and
 # SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILE, the
 # 20 s count restarts whenever FILE grows: the recorder, after SIGINT, writes what it has queued
-# (up to buffer_mb of recording.yaml), which on an overloaded host takes longer than 20 s (measured:
-# a 1 kHz + 720p demo on 2 cores, recorder killed, 9.7 s of 30 s left in the bag).
+# (up to buffer_mb of recording.yaml), which on an overloaded host can take longer than 20 s; killing
+# it then would lose the queued end of the recording.
 stop_pid() {
   local last=-1 size t=0
   kill -INT "$1" 2>/dev/null

@@ -10,7 +10,8 @@ import sys
 
 import rosgraph.masterapi
 
-IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock', '/tf', '/tf_static', '/saras/status')
+IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock', '/tf', '/tf_static', '/diagnostics', '/diagnostics_agg',
+                  '/diagnostics_toplevel_state')
 IGNORED_NODES = ('/rosout', '/rostopic', '/rosnode', '/wait_ready', '/recorder', '/visual_feedback_snapshot', '/node_graph')
 
 
@@ -51,7 +52,7 @@ def main(out_path):
     nodes.discard('/rosout')
     lines = ['# Platform node graph', '',
              'Captured from the running simulated platform (`make demo`, scripts/node_graph.py).',
-             'Edges are topics; `/tf`, `/tf_static`, the `/saras/status` heartbeats and /rosout are omitted',
+             'Edges are topics; `/tf`, `/tf_static`, `/diagnostics*` and /rosout are omitted',
              '(every node uses TF; see docs/interfaces.md for frames). A nodelet manager is drawn as a box',
              'holding its nodelets (their loader node names); its topics, including the zero-copy',
              'intra-process ones (self edge), are registered under the manager.', '',

@@ -2,19 +2,28 @@
 the deliverable's recording list, and writes the report (plots, augmented stereo frame, rviz
 screenshot of the replayed recording, topic table).
 
-On a machine with fewer than 4 cores the ~35 processes cannot all hold their nominal rates (see
-README "Resource budget"); the demo then exits 1 and names the slow streams, which is the truthful
-result (README "Status and known limitations" lists the measured shortfall). This test therefore
-requires everywhere that every required stream is recorded and flowing (periodic streams at >= 1 Hz)
-and that the demo's exit status agrees with the bag check; the full nominal-rate check (demo exit 0)
-is required on machines with >= 4 cores."""
+Everywhere: every required stream is recorded, every required periodic stream reaches the
+`min_rate_fraction` (80 %) of the rate the demo configured it at (`nominal_rate` in topics.json:
+recording.yaml's rate, "control" streams at the demo's CONTROL_RATE), and the demo's exit status
+agrees with its bag check. On machines with >= 4 cores the demo must also pass its full bag check
+(no lost messages), i.e. exit 0. On smaller machines scripts/demo.sh lowers the control rate and the
+endoscope size (README "Known limitations"); a stream that then drops a message is reported by the
+demo but does not fail this test, a stream below 80 % of its configured rate does."""
 import json
 import os
 import subprocess
 
+import yaml
+
 WS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DURATION = int(os.environ.get('SARAS_TEST_DEMO_DURATION', '20'))
-MIN_FLOWING_RATE = 1.0   # [Hz] a periodic stream below this is considered not flowing at all
+RECORDING = os.path.join(WS, 'src', 'saras_bringup', 'config', 'recording.yaml')
+
+
+def min_rate_fraction():
+    """The fraction of the configured rate a required stream must reach (recording.yaml)."""
+    with open(RECORDING) as f:
+        return float(yaml.safe_load(f).get('min_rate_fraction', 0.8))
 
 
 def test_demo_records_every_required_stream_and_writes_the_report(tmp_path):
@@ -28,15 +37,15 @@ def test_demo_records_every_required_stream_and_writes_the_report(tmp_path):
         check = json.load(f)
     rows = [r for r in check['results'] if r['required']]
     assert rows
-    for r in rows:
-        assert r['count'] > 0, 'required stream %s not recorded\n%s' % (r['topic'], log)
-        if r['nominal_rate'] > 0:
-            assert r['rate'] >= MIN_FLOWING_RATE, '%s at %.1f Hz (nominal %.0f)' % (
-                r['topic'], r['rate'], r['nominal_rate'])
-    if os.cpu_count() >= 4:
-        assert check['problems'] == [] and proc.returncode == 0, log
-    else:
-        assert (proc.returncode == 0) == (check['problems'] == []), log
+    fraction = min_rate_fraction()
+    slow = ['%s at %.1f Hz (configured %.0f Hz)' % (r['topic'], r['rate'], r['nominal_rate'])
+            for r in rows if r['nominal_rate'] > 0 and r['rate'] < fraction * r['nominal_rate']]
+    missing = [r['topic'] for r in rows if r['count'] == 0]
+    assert not missing, 'required streams not recorded: %s\n%s' % (missing, log)
+    assert not slow, 'required streams below %.0f %% of their rate: %s\n%s' % (100 * fraction, slow, log)
+    assert (proc.returncode == 0) == (check['problems'] == []), log
+    if len(os.sched_getaffinity(0)) >= 4:   # the cores demo.sh sees (nproc)
+        assert proc.returncode == 0, log
     report = out / 'report'
     html = (report / 'index.html').read_text()
     for png in ('trajectory_left.png', 'trajectory_right.png', 'distances.png', 'energies.png',

@@ -104,3 +104,17 @@ def test_node_graph_lists_every_node_of_platform_launch():
         name = (n.namespace.rstrip('/') + '/' + n.name)
         assert '"%s"' % name in graph, '%s missing from docs/node_graph.md' % name
         assert '"%s"' % name in readme, '%s missing from the README node graph' % name
+
+
+@pytest.mark.parametrize('pkg', PACKAGES)
+def test_python_tests_are_registered_with_catkin(pkg):
+    """A package with pytest files registers them with catkin's run_tests (saras_add_pytest), so
+    `make test` runs them; the root pytest.ini runs only tests/."""
+    test_dir = os.path.join(WS, 'src', pkg, 'test')
+    has_pytest = os.path.isdir(test_dir) and any(
+        f.startswith('test_') and f.endswith('.py') for f in os.listdir(test_dir))
+    if not has_pytest:
+        pytest.skip('%s has no pytest files' % pkg)
+    with open(os.path.join(WS, 'src', pkg, 'CMakeLists.txt')) as f:
+        cmake = f.read()
+    assert re.search(r'saras_add_pytest\(\s*test\b', cmake), '%s: saras_add_pytest(test) missing' % pkg

@@ -2,4 +2,5 @@
 from setuptools import setup
 from catkin_pkg.python_setup import generate_distutils_setup
 
-setup(**generate_distutils_setup(packages=['saras_bringup'], package_dir={'': 'src'}))
+setup(**generate_distutils_setup(packages=['saras_bringup', 'saras_bringup.netem'],
+                                 package_dir={'': 'src'}))

@@ -14,7 +14,7 @@ import numpy as np
 
 from saras_calibration.hand_eye import HandEyeError, OPENCV_METHODS, solve_hand_eye
 from saras_calibration.synthetic import ecm_hand_eye_dataset, opencv_hand_eye_dataset
-from saras_calibration.transforms import inverse, rotation_angle_deg
+from saras_common.transforms import inverse, rotation_angle_deg
 
 METHODS = ['robust'] + list(OPENCV_METHODS)
 

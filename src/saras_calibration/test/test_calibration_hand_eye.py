@@ -4,7 +4,7 @@ import pytest
 
 from saras_calibration.hand_eye import HandEyeError, OPENCV_METHODS, solve_hand_eye
 from saras_calibration.synthetic import ecm_hand_eye_dataset, opencv_hand_eye_dataset
-from saras_calibration.transforms import inverse, make_transform, rotation_angle_deg
+from saras_common.transforms import inverse, make_transform, rotation_angle_deg
 
 
 def errors(X, X_true):

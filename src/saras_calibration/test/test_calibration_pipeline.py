@@ -15,8 +15,8 @@ from saras_calibration.global_registration import GlobalRegistration
 from saras_calibration.hand_eye import solve_hand_eye
 from saras_calibration.pattern import CircularPattern
 from saras_calibration.synthetic import perturb_pose
-from saras_calibration.transforms import (inverse, make_transform, rotation_angle_deg, transform_from_rpy,
-                                          transform_points)
+from saras_common.transforms import (inverse, make_transform, rotation_angle_deg, transform_from_rpy,
+                                     transform_points)
 from saras_calibration.world_frames import entry_transform, load_world_frames, save_world_frames
 
 kin = pytest.importorskip('saras_description.kinematics')

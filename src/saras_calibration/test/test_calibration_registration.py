@@ -4,7 +4,7 @@ import pytest
 
 from saras_calibration.pattern import CircularPattern
 from saras_calibration.registration import RegistrationError, frame_from_three_points, register_points
-from saras_calibration.transforms import inverse, rotation_angle_deg, transform_from_rpy, transform_points
+from saras_common.transforms import inverse, rotation_angle_deg, transform_from_rpy, transform_points
 
 
 def test_three_points_frame_exact():

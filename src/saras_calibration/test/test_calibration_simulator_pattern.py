@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from saras_calibration.pattern import CircularPattern
-from saras_calibration.transforms import inverse, rotation_angle_deg, transform_from_rpy
+from saras_common.transforms import inverse, rotation_angle_deg, transform_from_rpy
 
 find_in_workspaces = pytest.importorskip('catkin.find_in_workspaces').find_in_workspaces
 RENDER = (find_in_workspaces(['libexec'], project='saras_simulation', path='endoscope_render',

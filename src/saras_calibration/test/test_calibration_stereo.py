@@ -9,7 +9,7 @@ import yaml
 
 from saras_calibration.stereo import StereoCalibrationError, StereoSampleCollector, calibrate_stereo, parse_board_size
 from saras_calibration.synthetic import checkerboard_views, render_checkerboard
-from saras_calibration.transforms import make_transform
+from saras_common.transforms import make_transform
 
 SIZE = (640, 480)
 K_L = np.array([[700.0, 0, 322.0], [0, 705.0, 236.0], [0, 0, 1]])

@@ -4,8 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from saras_calibration.transforms import (NonRigidTransformError, inverse, quaternion_from_transform,
-                                          transform_from_quaternion, transform_from_rpy, validate_transform)
+from saras_common.transforms import inverse, transform_from_rpy
 from saras_calibration.world_frames import (WorldFramesError, entry_transform, frame_entry, load_world_frames,
                                             merge_frames, registration_frames, save_world_frames)
 
@@ -47,20 +46,6 @@ def test_bad_files(tmp_path):
         load_world_frames(str(p))
     with pytest.raises(WorldFramesError, match='cannot read'):
         load_world_frames(str(tmp_path / 'missing.yaml'))
-
-
-def test_transform_helpers():
-    T = transform_from_rpy([1, 2, 3], [0.3, -0.2, 0.1])
-    np.testing.assert_allclose(transform_from_quaternion(T[:3, 3], quaternion_from_transform(T)), T, atol=1e-12)
-    np.testing.assert_allclose(inverse(T) @ T, np.eye(4), atol=1e-12)
-    bad = T.copy()
-    bad[:3, :3] = np.diag([1, 1, -1])
-    with pytest.raises(NonRigidTransformError, match='determinant'):
-        validate_transform(bad)
-    with pytest.raises(NonRigidTransformError, match='4x4'):
-        validate_transform(np.eye(3))
-    with pytest.raises(NonRigidTransformError, match='zero'):
-        transform_from_quaternion([0, 0, 0], [0, 0, 0, 0])
 
 
 def test_hand_eye_file_loads_in_saras_description(tmp_path):

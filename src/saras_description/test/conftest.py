@@ -2,6 +2,8 @@
 import os
 import sys
 
-_SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', 'src'))
-if _SRC not in sys.path:
-    sys.path.insert(0, _SRC)
+_HERE = os.path.dirname(os.path.abspath(__file__))
+for _p in (os.path.join(_HERE, '..', 'src'), os.path.join(_HERE, '..', '..', 'saras_common', 'src')):
+    _p = os.path.abspath(_p)
+    if _p not in sys.path:
+        sys.path.insert(0, _p)

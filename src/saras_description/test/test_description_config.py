@@ -4,7 +4,7 @@ import pytest
 
 from saras_description import config as cfg
 from saras_description import urdf
-from saras_description.transforms import xyz_rpy
+from saras_common.transforms import transform_from_rpy
 
 
 def _write(tmp_path, text, name='c.yaml'):
@@ -23,7 +23,7 @@ def test_default_files_load():
     np.testing.assert_allclose(setups['mesa_left'].pa_joints[[0, 2, 4, 6]],
                                -setups['mesa_right'].pa_joints[[0, 2, 4, 6]], atol=1e-6)
     he = cfg.load_hand_eye()
-    np.testing.assert_allclose(he.left_to_right, xyz_rpy([0.005, 0, 0], [0, 0, 0]))
+    np.testing.assert_allclose(he.left_to_right, transform_from_rpy([0.005, 0, 0], [0, 0, 0]))
 
 
 @pytest.mark.parametrize('text, needle', [

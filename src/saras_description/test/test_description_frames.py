@@ -6,19 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from saras_description.frames import FramesError, load_frames, parse_frames, rpy_to_quaternion, world_transform
+from saras_description.frames import FramesError, load_frames, parse_frames, world_transform
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SHIPPED = os.path.join(HERE, "..", "..", "saras_bringup", "config", "world_frames.yaml")
-
-
-def test_rpy_matches_scipy_fixed_axes():
-    rng = np.random.default_rng(1)
-    for _ in range(200):
-        r, p, y = rng.uniform(-math.pi, math.pi, 3)
-        q = rpy_to_quaternion(r, p, y)
-        ref = Rotation.from_euler('xyz', [r, p, y]).as_quat()   # extrinsic x, y, z = URDF rpy
-        assert min(np.abs(np.array(q) - ref).max(), np.abs(np.array(q) + ref).max()) < 1e-12
 
 
 def test_shipped_file_is_valid_and_places_the_scene():

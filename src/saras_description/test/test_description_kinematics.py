@@ -8,7 +8,7 @@ from saras_description_testlib import UrdfTree
 from saras_description import config as cfg
 from saras_description import kinematics as k
 from saras_description import urdf
-from saras_description.transforms import matrix_to_quat, quat_to_matrix, rpy_to_matrix
+from saras_common.transforms import quaternion_from_matrix, quaternion_to_matrix, rpy_to_matrix
 
 N = 200
 TOL = 1e-9
@@ -148,7 +148,7 @@ def test_touch_fk_matches_urdf_and_ik_round_trip():
         t = k.touch_handle_in_base(q)
         np.testing.assert_allclose(t, tree.fk(prefix + 'base', prefix + 'handle', dict(zip(names, q))),
                                    atol=TOL)
-        qi, ok = k.touch_ik(t[:3, 3], matrix_to_quat(t[:3, :3]))
+        qi, ok = k.touch_ik(t[:3, 3], quaternion_from_matrix(t[:3, :3]))
         if not ok:
             failures += 1
             continue
@@ -170,4 +170,4 @@ def test_quaternion_helpers_against_rpy():
     for _ in range(N):
         rpy = rng.uniform(-3, 3, 3)
         r = rpy_to_matrix(rpy)
-        np.testing.assert_allclose(quat_to_matrix(matrix_to_quat(r)), r, atol=1e-12)
+        np.testing.assert_allclose(quaternion_to_matrix(quaternion_from_matrix(r)), r, atol=1e-12)

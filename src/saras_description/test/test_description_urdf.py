@@ -11,7 +11,7 @@ from saras_description_testlib import UrdfTree
 from saras_description import config as cfg
 from saras_description import kinematics as k
 from saras_description import urdf
-from saras_description.transforms import xyz_rpy
+from saras_common.transforms import transform_from_rpy
 
 PKG = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 MAKE_URDF = os.path.join(PKG, 'scripts', 'make_urdf')
@@ -102,7 +102,7 @@ def test_setup_pose_puts_rcm_on_the_trocar(side):
     values = dict(zip(k.saras_arm_pa_joint_names(side + '/'), setup.pa_joints))
     rcm = tree.fk('world', side + '/rcm', values)
     np.testing.assert_allclose(rcm[:3, 3], expected, atol=1e-6)
-    np.testing.assert_allclose(xyz_rpy(base.xyz, base.rpy) @ k.saras_arm_rcm_in_base(setup.pa_joints),
+    np.testing.assert_allclose(transform_from_rpy(base.xyz, base.rpy) @ k.saras_arm_rcm_in_base(setup.pa_joints),
                                rcm, atol=1e-9)
     site = np.array([0.0, 0.0, 0.10])
     direction = (site - rcm[:3, 3]) / np.linalg.norm(site - rcm[:3, 3])

@@ -91,6 +91,12 @@ public:
     std::lock_guard<std::mutex> lock(mutex_);
     return pushed_;
   }
+  /// Bytes queued now [bytes].
+  std::size_t bytes() const
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return bytes_;
+  }
   /// Largest number of queued bytes seen [bytes].
   std::size_t peakBytes() const
   {

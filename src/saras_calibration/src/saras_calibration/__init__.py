@@ -1,7 +1,6 @@
 """SARAS multi-robot calibration suite (ROS-agnostic core).
 
 Modules:
-  transforms    rigid-transform helpers and validation (metres, radians)
   hand_eye      eye-on-hand calibration (ECM end effector -> endoscope camera), robust
   registration  three-point frames and least-squares point registration (Kabsch)
   pattern       geometry, rendering and detection of the circular calibration pattern

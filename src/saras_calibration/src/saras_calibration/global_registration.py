@@ -13,7 +13,7 @@ import numpy as np
 
 from .pattern import CircularPattern
 from .registration import RegistrationError, register_points
-from .transforms import average_rotation, inverse, make_transform, transform_from_rpy, validate_transform
+from saras_common.transforms import average_rotation, inverse, make_transform, transform_from_rpy, validate_transform
 from .world_frames import frame_entry
 
 __all__ = ['GlobalRegistration', 'DEFAULT_PATTERN_IN_WORLD']

@@ -30,7 +30,7 @@ import numpy as np
 from scipy.optimize import least_squares, minimize
 from scipy.spatial.transform import Rotation
 
-from .transforms import (average_rotation, inverse, make_transform, validate_transforms)
+from saras_common.transforms import (average_rotation, inverse, make_transform, validate_transforms)
 
 __all__ = ['HandEyeError', 'HandEyeResult', 'solve_hand_eye', 'opencv_hand_eye', 'OPENCV_METHODS',
            'hand_eye_residuals', 'check_rotation_excitation']
@@ -265,6 +265,68 @@ def _subset_ok(ee_sub, min_rotation_rad, min_axis_cos):
     return abs(rv1 @ rv2) / (a1 * a2) < min_axis_cos
 
 
+def _consensus(ee, cm, trials, rng, min_rotation_deg, min_axis_angle_deg, rot_thr, trans_thr):
+    """Robust initial estimate: the 3-sample solution (Park) whose residual medians over all samples
+    are smallest, and its inliers. Returns (X or None, inlier mask)."""
+    n = len(ee)
+    min_cos = np.cos(np.radians(min_axis_angle_deg))
+    cands = []
+    for sub in _candidate_subsets(n, trials, rng):
+        sub = list(sub)
+        if not _subset_ok(ee[sub], np.radians(min_rotation_deg), min_cos):
+            continue
+        try:
+            Xc = opencv_hand_eye(ee[sub], cm[sub], 'park')
+        except HandEyeError:
+            continue
+        if not np.all(np.isfinite(Xc)):
+            continue
+        Mc = _marker_in_base(Xc, ee[sub], cm[sub])
+        r, t, _, _ = hand_eye_residuals(Xc, Mc, ee, cm)
+        cands.append((np.median(r), np.median(t), Xc, r, t))
+    if not cands:
+        return None, np.ones(n, dtype=bool)
+    mr = max(min(c[0] for c in cands), 1e-12)
+    mt = max(min(c[1] for c in cands), 1e-15)
+    _, _, X, r, t = min(cands, key=lambda c: c[0] / mr + c[1] / mt)
+    thr_r, thr_t = _thresholds(r, t, rot_thr, trans_thr)
+    inl = (r <= thr_r) & (t <= thr_t)
+    if np.count_nonzero(inl) < 3:
+        inl = np.ones(n, dtype=bool)
+    return X, inl
+
+
+def _robust_refine(X, M, ee, cm, inl, rot_thr, trans_thr):
+    """Alternates the weighted refinement, the noise-model fit and the inlier gate (3 rounds, then
+    a final refinement). Returns (X, M, inlier mask)."""
+    # Initial noise model: rotation/translation spread shared equally by camera and robot.
+    r, t, _, _ = hand_eye_residuals(X, M, ee[inl], cm[inl])
+    sr = max(np.median(r) / 1.54, 1e-7) / np.sqrt(2.0)
+    st = max(np.median(t) / 1.54, 1e-9) / np.sqrt(2.0)
+    s = np.array([sr, st, sr, st])
+    for _ in range(3):
+        X, M = _refine(X, M, ee[inl], cm[inl], s)
+        r_all, t_all, rv, dt = hand_eye_residuals(X, M, ee, cm)
+        if np.count_nonzero(inl) >= 6:
+            s = _fit_noise(np.hstack([rv, dt])[inl], _residual_jacobians(X, M, ee[inl]), s)
+            s = np.maximum(s, [1e-7, 1e-9, 1e-7, 1e-9])
+        if rot_thr is None and trans_thr is None and np.count_nonzero(inl) >= 6:
+            # Mahalanobis distance under the fitted noise model (corrected for the 12
+            # estimated parameters), chi-square 6 dof at 99.9 %.
+            k = np.count_nonzero(inl)
+            C = _covariances(_residual_jacobians(X, M, ee), s * np.sqrt(6.0 * k / (6.0 * k - 12.0)))
+            e = np.hstack([rv, dt])
+            d2 = np.einsum('ni,ni->n', e, np.linalg.solve(C, e[..., None])[..., 0])
+            new_inl = d2 <= _CHI2_6DOF_999
+        else:
+            thr_r, thr_t = _thresholds(r_all[inl], t_all[inl], rot_thr, trans_thr)
+            new_inl = (r_all <= thr_r) & (t_all <= thr_t)
+        if np.count_nonzero(new_inl) >= 3:
+            inl = new_inl
+    X, M = _refine(X, M, ee[inl], cm[inl], s)
+    return X, M, inl
+
+
 def solve_hand_eye(ee_poses, marker_poses, method='robust', min_rotation_deg=2.0,
                    min_axis_angle_deg=10.0, ransac_trials=200, rotation_threshold_deg=None,
                    translation_threshold_m=None, min_inlier_fraction=0.5, seed=0):
@@ -300,62 +362,14 @@ def solve_hand_eye(ee_poses, marker_poses, method='robust', min_rotation_deg=2.0
         M = _marker_in_base(X, ee, cm)
         inl = np.ones(n, dtype=bool)
     else:
-        inl = np.ones(n, dtype=bool)
-        X = None
+        X, inl = None, np.ones(n, dtype=bool)
         if n >= 6:
-            rng = np.random.default_rng(seed)
-            min_cos = np.cos(np.radians(min_axis_angle_deg))
-            cands = []
-            for sub in _candidate_subsets(n, ransac_trials, rng):
-                sub = list(sub)
-                if not _subset_ok(ee[sub], np.radians(min_rotation_deg), min_cos):
-                    continue
-                try:
-                    Xc = opencv_hand_eye(ee[sub], cm[sub], 'park')
-                except HandEyeError:
-                    continue
-                if not np.all(np.isfinite(Xc)):
-                    continue
-                Mc = _marker_in_base(Xc, ee[sub], cm[sub])
-                r, t, _, _ = hand_eye_residuals(Xc, Mc, ee, cm)
-                cands.append((np.median(r), np.median(t), Xc, Mc, r, t))
-            if cands:
-                mr = max(min(c[0] for c in cands), 1e-12)
-                mt = max(min(c[1] for c in cands), 1e-15)
-                best = min(cands, key=lambda c: c[0] / mr + c[1] / mt)
-                _, _, X, M, r, t = best
-                thr_r, thr_t = _thresholds(r, t, rot_thr, trans_thr)
-                inl = (r <= thr_r) & (t <= thr_t)
-                if np.count_nonzero(inl) < 3:
-                    inl = np.ones(n, dtype=bool)
+            X, inl = _consensus(ee, cm, ransac_trials, np.random.default_rng(seed), min_rotation_deg,
+                                min_axis_angle_deg, rot_thr, trans_thr)
         if X is None or np.count_nonzero(inl) >= 3:
             X = opencv_hand_eye(ee[inl], cm[inl], 'park')
-            M = _marker_in_base(X, ee[inl], cm[inl])
-        # Initial noise model: rotation/translation spread shared equally by camera and robot.
-        r, t, _, _ = hand_eye_residuals(X, M, ee[inl], cm[inl])
-        sr = max(np.median(r) / 1.54, 1e-7) / np.sqrt(2.0)
-        st = max(np.median(t) / 1.54, 1e-9) / np.sqrt(2.0)
-        s = np.array([sr, st, sr, st])
-        for it in range(3):
-            X, M = _refine(X, M, ee[inl], cm[inl], s)
-            r_all, t_all, rv, dt = hand_eye_residuals(X, M, ee, cm)
-            if np.count_nonzero(inl) >= 6:
-                s = _fit_noise(np.hstack([rv, dt])[inl], _residual_jacobians(X, M, ee[inl]), s)
-                s = np.maximum(s, [1e-7, 1e-9, 1e-7, 1e-9])
-            if rot_thr is None and trans_thr is None and np.count_nonzero(inl) >= 6:
-                # Mahalanobis distance under the fitted noise model (corrected for the 12
-                # estimated parameters), chi-square 6 dof at 99.9 %.
-                k = np.count_nonzero(inl)
-                C = _covariances(_residual_jacobians(X, M, ee), s * np.sqrt(6.0 * k / (6.0 * k - 12.0)))
-                e = np.hstack([rv, dt])
-                d2 = np.einsum('ni,ni->n', e, np.linalg.solve(C, e[..., None])[..., 0])
-                new_inl = d2 <= _CHI2_6DOF_999
-            else:
-                thr_r, thr_t = _thresholds(r_all[inl], t_all[inl], rot_thr, trans_thr)
-                new_inl = (r_all <= thr_r) & (t_all <= thr_t)
-            if np.count_nonzero(new_inl) >= 3:
-                inl = new_inl
-        X, M = _refine(X, M, ee[inl], cm[inl], s)
+        M = _marker_in_base(X, ee[inl], cm[inl])
+        X, M, inl = _robust_refine(X, M, ee, cm, inl, rot_thr, trans_thr)
 
     if np.count_nonzero(inl) < max(3, int(np.ceil(min_inlier_fraction * n))):
         raise HandEyeError('too many outliers: only %d of %d samples are consistent'

@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 
 from .registration import register_points
-from .transforms import inverse, make_transform, validate_transform
+from saras_common.transforms import inverse, make_transform, validate_transform
 
 __all__ = ['CircularPattern', 'PatternDetectionError']
 

@@ -9,7 +9,7 @@ Points are in metres; returned transforms are 4x4 numpy arrays.
 """
 import numpy as np
 
-from .transforms import make_transform
+from saras_common.transforms import make_transform
 
 __all__ = ['RegistrationError', 'frame_from_three_points', 'register_points']
 

@@ -1,66 +1,19 @@
-"""ROS adapters shared by the nodes in ``scripts/`` (the only module that imports rospy).
+"""ROS adapters shared by the nodes in ``scripts/`` (the only module of the package importing rospy).
 
-Conversions between ROS messages and 4x4 numpy transforms, start-up parameter validation
-(a bad value is a fatal error naming the parameter; the node exits non-zero), and a latched
-"last valid pose" holder that rejects malformed messages with a counter and a throttled error.
+Message conversions come from :mod:`saras_common.transforms` and parameters are read with
+:mod:`saras_common.params`; this module adds the frames-file entry -> TransformStamped conversion
+and a "last valid pose" holder that rejects malformed messages with a counter and a throttled error.
 """
-import sys
 import threading
 
-import numpy as np
 import rospy
-from geometry_msgs.msg import TransformStamped
-
-from .transforms import make_transform, quaternion_from_transform, transform_from_rpy
-from scipy.spatial.transform import Rotation
-
-
-def fatal(node, msg):
-    """Log a fatal start-up error and exit with status 2."""
-    rospy.logfatal('%s: %s', node, msg)
-    sys.exit(2)
-
-
-def param(node, name, default, kind=None, check=None, what=''):
-    """Read ``~name`` once; ``kind`` converts, ``check(value)`` validates; fatal otherwise."""
-    value = rospy.get_param('~' + name, default)
-    try:
-        if kind is not None:
-            value = kind(value)
-        if check is not None and not check(value):
-            raise ValueError('expected %s' % what)
-    except (TypeError, ValueError) as exc:
-        fatal(node, 'invalid parameter ~%s = %r (%s)' % (name, value, exc))
-    return value
-
-
-def pose_to_matrix(pose):
-    """geometry_msgs/Pose -> 4x4; raises ValueError on NaN or a zero quaternion."""
-    p, q = pose.position, pose.orientation
-    v = np.array([p.x, p.y, p.z, q.x, q.y, q.z, q.w], dtype=float)
-    if not np.all(np.isfinite(v)):
-        raise ValueError('pose contains NaN or inf')
-    n = np.linalg.norm(v[3:])
-    if abs(n - 1.0) > 0.01:
-        raise ValueError('pose quaternion norm %.4f is not 1' % n)
-    return make_transform(Rotation.from_quat(v[3:] / n).as_matrix(), v[:3])
-
-
-def matrix_to_transform(T, parent, child, stamp=None):
-    """4x4 -> geometry_msgs/TransformStamped ``parent -> child``."""
-    ts = TransformStamped()
-    ts.header.stamp = stamp or rospy.Time.now()
-    ts.header.frame_id = parent
-    ts.child_frame_id = child
-    ts.transform.translation.x, ts.transform.translation.y, ts.transform.translation.z = (float(v) for v in T[:3, 3])
-    q = quaternion_from_transform(T)
-    ts.transform.rotation.x, ts.transform.rotation.y, ts.transform.rotation.z, ts.transform.rotation.w = (float(v) for v in q)
-    return ts
+from saras_common.transforms import pose_to_matrix, transform_from_rpy, transform_stamped
 
 
 def entry_to_transform(entry, stamp=None):
-    """World-frame YAML entry -> TransformStamped."""
-    return matrix_to_transform(transform_from_rpy(entry['xyz'], entry['rpy']), entry['parent'], entry['child'], stamp)
+    """World-frame YAML entry -> TransformStamped ``parent -> child`` (stamp default: now)."""
+    return transform_stamped(entry['parent'], entry['child'], transform_from_rpy(entry['xyz'], entry['rpy']),
+                             stamp or rospy.Time.now())
 
 
 class LatestPose:
@@ -94,6 +47,11 @@ class LatestPose:
             self.T, self.stamp, self.frame = T, msg.header.stamp, msg.header.frame_id
             self.received_at = rospy.Time.now()
             self.received += 1
+
+    def counts(self):
+        """(received, rejected) message counts."""
+        with self.lock:
+            return self.received, self.rejected
 
     def get(self, max_age):
         """(T, stamp) of the last valid pose if received within ``max_age`` [s], else raise

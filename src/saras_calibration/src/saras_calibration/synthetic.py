@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .transforms import inverse, make_transform
+from saras_common.transforms import inverse, make_transform
 
 __all__ = ['random_pose', 'perturb_pose', 'corrupt_pose', 'opencv_hand_eye_dataset',
            'ecm_hand_eye_dataset', 'render_checkerboard', 'checkerboard_views']

@@ -14,7 +14,7 @@ import os
 import numpy as np
 from saras_description.frames import FramesError, load_frames, parse_frames
 
-from .transforms import inverse, rpy_from_transform, transform_from_rpy, validate_transform
+from saras_common.transforms import inverse, rpy_from_transform, transform_from_rpy, validate_transform
 
 __all__ = ['WorldFramesError', 'load_world_frames', 'save_world_frames', 'frame_entry',
            'registration_frames', 'merge_frames', 'entry_transform']

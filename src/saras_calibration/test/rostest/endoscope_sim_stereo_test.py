@@ -16,8 +16,7 @@ import tf2_ros
 import yaml
 from sensor_msgs.msg import CameraInfo
 
-from saras_calibration.ros_io import matrix_to_transform
-from saras_calibration.transforms import make_transform, transform_from_rpy
+from saras_common.transforms import make_transform, transform_from_rpy, transform_stamped
 
 OUT = None   # ~output_dir of the test node (set in the .test file)
 BOARD_CENTRE = np.array([0.0, 0.02, 0.085]) + transform_from_rpy([0, 0, 0], [np.pi, 0, 0.3])[:3, :3] @ [0.028, 0.020, 0.0]
@@ -45,8 +44,8 @@ class EndoscopeSimStereoTest(unittest.TestCase):
             now = rospy.Time.now()
             if now > switch:
                 pose, switch = camera_pose(rng), now + rospy.Duration(1.0)
-            br.sendTransform([matrix_to_transform(pose, 'world', 'endoscope/left_optical_frame', now),
-                              matrix_to_transform(pose @ T_left_right, 'world', 'endoscope/right_optical_frame', now)])
+            br.sendTransform([transform_stamped('world', 'endoscope/left_optical_frame', pose, now),
+                              transform_stamped('world', 'endoscope/right_optical_frame', pose @ T_left_right, now)])
             if info is None:
                 try:
                     info = rospy.wait_for_message('/endoscope/left/camera_info', CameraInfo, timeout=0.05)

@@ -12,8 +12,8 @@ from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
 from saras_calibration.pattern import CircularPattern
-from saras_calibration.transforms import (inverse, quaternion_from_transform, rotation_angle_deg,
-                                          transform_from_rpy, transform_points)
+from saras_common.transforms import (inverse, quaternion_from_transform, rotation_angle_deg,
+                                     transform_from_rpy, transform_points)
 from saras_calibration.world_frames import entry_transform, load_world_frames
 
 OUT = None   # ~output_file of the test node (set in the .test file)

@@ -10,7 +10,7 @@ from geometry_msgs.msg import PoseStamped
 from std_srvs.srv import Trigger
 
 from saras_calibration.synthetic import ecm_hand_eye_dataset
-from saras_calibration.transforms import inverse, quaternion_from_transform, rotation_angle_deg
+from saras_common.transforms import inverse, quaternion_from_transform, rotation_angle_deg
 from saras_calibration.world_frames import entry_transform, load_world_frames
 from saras_msgs.srv import RemoveSample
 

@@ -11,8 +11,7 @@ from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import CameraInfo, Image
 
 from saras_calibration.pattern import CircularPattern
-from saras_calibration.ros_io import pose_to_matrix
-from saras_calibration.transforms import inverse, rotation_angle_deg, transform_from_rpy
+from saras_common.transforms import inverse, pose_to_matrix, rotation_angle_deg, transform_from_rpy
 
 K = np.array([[800.0, 0, 320], [0, 800.0, 240], [0, 0, 1]])
 

@@ -12,7 +12,7 @@ from cv_bridge import CvBridge
 from sensor_msgs.msg import Image
 
 from saras_calibration.synthetic import checkerboard_views, render_checkerboard
-from saras_calibration.transforms import make_transform
+from saras_common.transforms import make_transform
 from saras_calibration.world_frames import entry_transform, load_world_frames
 
 OUT = None   # ~output_dir of the test node (set in the .test file)

@@ -11,7 +11,7 @@ import numpy as np
 import yaml
 
 from saras_description import frames as frames_mod
-from saras_description.transforms import xyz_rpy
+from saras_common.transforms import transform_from_rpy
 
 #: ECM camera extrinsics: ``tip_to_left`` (ECM/tool_tip -> endoscope/left_optical_frame) and
 #: ``left_to_right`` (left -> right optical frame), 4x4 each; the source frames too.
@@ -116,7 +116,7 @@ def load_hand_eye(path=None):
     if np.linalg.norm(out[0].xyz) > 0.05:
         raise ConfigError('%s: tool_tip->left camera offset %.3f m is implausible (> 0.05 m)'
                           % (path, np.linalg.norm(out[0].xyz)))
-    return HandEye(xyz_rpy(out[0].xyz, out[0].rpy), xyz_rpy(out[1].xyz, out[1].rpy), out)
+    return HandEye(transform_from_rpy(out[0].xyz, out[0].rpy), transform_from_rpy(out[1].xyz, out[1].rpy), out)
 
 
 def load_saras_arms(path=None):

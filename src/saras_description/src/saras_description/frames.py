@@ -18,10 +18,9 @@ import math
 
 import numpy as np
 import yaml
-from saras_description import transforms  # the platform's one implementation of rotations
+from saras_common.transforms import matrix_to_rpy, quaternion_from_matrix, quaternion_to_matrix, rpy_to_matrix
 
-__all__ = ['FramesError', 'StaticFrame', 'rpy_to_quaternion', 'quaternion_to_matrix', 'parse_frames',
-           'load_frames', 'world_transform', 'frames_by_child']
+__all__ = ['FramesError', 'StaticFrame', 'parse_frames', 'load_frames', 'world_transform', 'frames_by_child']
 
 
 class FramesError(ValueError):
@@ -43,7 +42,7 @@ class StaticFrame(object):
         self.translation = tuple(float(v) for v in translation)
         self.quaternion = tuple(float(v) for v in quaternion)
         if rpy is None:
-            rpy = transforms.matrix_to_rpy(quaternion_to_matrix(self.quaternion))
+            rpy = matrix_to_rpy(quaternion_to_matrix(self.quaternion))
         self.rpy = tuple(float(v) for v in rpy)
 
     @property
@@ -61,16 +60,6 @@ class StaticFrame(object):
     def __repr__(self):
         return 'StaticFrame(%s -> %s, t=%s, q=%s)' % (self.parent, self.child,
                                                        self.translation, self.quaternion)
-
-
-def rpy_to_quaternion(roll, pitch, yaw):
-    """Fixed-axis roll/pitch/yaw [rad] to a unit quaternion (x, y, z, w), w >= 0."""
-    return tuple(float(v) for v in transforms.matrix_to_quat(transforms.rpy_to_matrix([roll, pitch, yaw])))
-
-
-def quaternion_to_matrix(q):
-    """Unit quaternion (x, y, z, w) to a 3x3 rotation matrix."""
-    return transforms.quat_to_matrix(q)
 
 
 def _vector(entry, index, key, length):
@@ -123,7 +112,7 @@ def parse_frames(data, root='world'):
             q = [v / n for v in q]
         else:
             rpy = _vector(entry, i, 'rpy', 3)
-            q = rpy_to_quaternion(*rpy)
+            q = quaternion_from_matrix(rpy_to_matrix(rpy))
         parents[child] = parent
         frames.append(StaticFrame(parent, child, xyz, q, rpy))
     for f in frames:

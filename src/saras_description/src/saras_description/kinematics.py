@@ -23,8 +23,8 @@ from collections import OrderedDict
 import numpy as np
 
 from saras_description.geometry import EcmGeometry, PsmGeometry, SarasArmGeometry, TouchGeometry
-from saras_description.transforms import (matrix_to_quat, quat_to_matrix, rot_x,
-                                          rot_y, rot_z, trans, wrap_angle, xyz_rpy)
+from saras_common.transforms import (quaternion_from_matrix, quaternion_to_matrix, rot_x, rot_y, rot_z,
+                                     transform_from_rpy, translation, wrap_angle)
 
 SARAS_ARM_PREFIXES = ('mesa_left/', 'mesa_right/')
 TOUCH_PREFIXES = ('touch_left/', 'touch_right/')
@@ -70,7 +70,7 @@ def pivot_tip(yaw, pitch, insertion, roll=0.0):
     :param roll: rotation about the instrument axis [rad]
     :returns: 4x4; z axis along the instrument into the patient.
     """
-    # = rot_y(-yaw) @ rot_x(-pitch) @ rot_x(pi) @ trans(z=insertion) @ rot_z(roll), expanded.
+    # = rot_y(-yaw) @ rot_x(-pitch) @ rot_x(pi) @ translation(z=insertion) @ rot_z(roll), expanded.
     ca, sa = math.cos(yaw), math.sin(yaw)
     cb, sb = math.cos(pitch), math.sin(pitch)
     cr, sr = math.cos(roll), math.sin(roll)
@@ -129,7 +129,7 @@ def saras_arm_joint_limits(prefix=''):
 def saras_arm_flange_in_base(pa_joints):
     """Positioning-arm flange in ``<p>sbs_world`` for the 7 PA joint values [rad]."""
     q = _vector(pa_joints, 7, 'saras_arm_flange_in_base')
-    # t = prod(trans(z=offset_i) @ rot(axis_i, q_i)) @ trans(z=flange), written out with Python
+    # t = prod(translation(z=offset_i) @ rot(axis_i, q_i)) @ translation(z=flange), written out with Python
     # floats (columns x, y, z and position p): ~20x faster than 4x4 numpy products.
     x, y, z, p = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]
     for (axis, offset), qi in zip(SarasArmGeometry.PA_JOINTS, q.tolist()):
@@ -151,7 +151,7 @@ def saras_arm_flange_to_rcm():
     return _FLANGE_TO_RCM.copy()
 
 
-_FLANGE_TO_RCM = xyz_rpy(SarasArmGeometry.FLANGE_TO_RCM_XYZ, SarasArmGeometry.FLANGE_TO_RCM_RPY)
+_FLANGE_TO_RCM = transform_from_rpy(SarasArmGeometry.FLANGE_TO_RCM_XYZ, SarasArmGeometry.FLANGE_TO_RCM_RPY)
 
 
 def saras_arm_rcm_in_base(pa_joints):
@@ -211,8 +211,8 @@ def psm_tip_in_base(q):
     q = _vector(q, 6, 'psm_tip_in_base')
     g = PsmGeometry
     wrist = g.WRIST_PITCH_TO_YAW + g.WRIST_YAW_TO_TIP
-    return (pivot_tip(q[0], q[1], q[2] - wrist, q[3]) @ rot_x(q[4]) @ trans(z=g.WRIST_PITCH_TO_YAW)
-            @ rot_y(q[5]) @ trans(z=g.WRIST_YAW_TO_TIP))
+    return (pivot_tip(q[0], q[1], q[2] - wrist, q[3]) @ rot_x(q[4]) @ translation(z=g.WRIST_PITCH_TO_YAW)
+            @ rot_y(q[5]) @ translation(z=g.WRIST_YAW_TO_TIP))
 
 
 def psm_ik_position(p):
@@ -266,7 +266,7 @@ def touch_elbow_in_base(q):
     """Frame after the elbow joint (origin = elbow axis) in ``<p>base``."""
     g = TouchGeometry
     q = _vector(q, 3, 'touch_elbow_in_base')
-    return (rot_z(q[0]) @ trans(z=g.SHOULDER_HEIGHT) @ rot_y(q[1]) @ trans(x=-g.UPPER_ARM)
+    return (rot_z(q[0]) @ translation(z=g.SHOULDER_HEIGHT) @ rot_y(q[1]) @ translation(x=-g.UPPER_ARM)
             @ rot_y(q[2]))
 
 
@@ -277,7 +277,7 @@ def touch_handle_in_base(q):
     the handle frame is aligned with the base frame.
     """
     q = _vector(q, 6, 'touch_handle_in_base')
-    return (touch_elbow_in_base(q) @ trans(z=-TouchGeometry.FOREARM) @ rot_z(q[3]) @ rot_y(q[4])
+    return (touch_elbow_in_base(q) @ translation(z=-TouchGeometry.FOREARM) @ rot_z(q[3]) @ rot_y(q[4])
             @ rot_x(q[5]))
 
 
@@ -295,7 +295,7 @@ def touch_ik(position, quaternion):
     quat = _vector(quaternion, 4, 'touch_ik quaternion')
     if np.linalg.norm(quat) < 1e-9:
         raise ValueError('touch_ik: zero quaternion')
-    rot = quat_to_matrix(quat)
+    rot = quaternion_to_matrix(quat)
     limits = touch_joint_limits()
     lo = np.array([lim.lower for lim in limits.values()])
     hi = np.array([lim.upper for lim in limits.values()])
@@ -334,4 +334,4 @@ def _touch_ik_branch(waist, r, height, rot):
 
 def pose_to_position_quaternion(t):
     """(position [m], ROS quaternion (x, y, z, w)) of a 4x4 pose."""
-    return np.array(t[:3, 3]), matrix_to_quat(t[:3, :3])
+    return np.array(t[:3, 3]), quaternion_from_matrix(t[:3, :3])

@@ -6,7 +6,7 @@ Used by ``scripts/solve_pa_setup`` to (re)write ``config/saras_arms.yaml`` when 
 import numpy as np
 
 from saras_description.kinematics import saras_arm_joint_limits, saras_arm_rcm_in_base
-from saras_description.transforms import inverse
+from saras_common.transforms import inverse
 
 #: Comfortable posture the solver is pulled toward (elbow up, wrist bent down) [rad].
 NOMINAL_PA = np.array([0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0])

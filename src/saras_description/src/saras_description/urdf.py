@@ -19,7 +19,7 @@ from saras_description import config as cfg
 from saras_description.geometry import EcmGeometry, PsmGeometry, SarasArmGeometry, TouchGeometry
 from saras_description.kinematics import (ecm_joint_limits, psm_joint_limits,
                                           saras_arm_joint_limits, touch_joint_limits)
-from saras_description.transforms import axis_angle, matrix_to_rpy
+from saras_common.transforms import axis_angle, matrix_to_rpy
 
 #: name -> RGBA
 MATERIALS = {

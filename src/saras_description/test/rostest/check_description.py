@@ -9,7 +9,7 @@ import tf2_ros
 
 from saras_description import config as cfg
 from saras_description import kinematics as k
-from saras_description.transforms import matrix_to_quat
+from saras_common.transforms import quaternion_from_matrix
 
 ROBOTS = ('mesa_left', 'mesa_right', 'PSM1', 'PSM2', 'ECM', 'touch_left', 'touch_right')
 
@@ -50,7 +50,7 @@ class DescriptionTf(unittest.TestCase):
         he = cfg.load_hand_eye()
         t = he.tip_to_left @ he.left_to_right
         np.testing.assert_allclose(p, t[:3, 3], atol=1e-6)
-        self.assertGreater(abs(np.dot(q, matrix_to_quat(t[:3, :3]))), 1.0 - 1e-9)
+        self.assertGreater(abs(np.dot(q, quaternion_from_matrix(t[:3, :3]))), 1.0 - 1e-9)
 
     def test_touch_handles(self):
         p, q = self.lookup('touch_left/base', 'touch_left/handle')
