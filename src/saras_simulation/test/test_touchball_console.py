@@ -153,3 +153,15 @@ def test_replay_from_recorded_states():
     it = rep(0.5)
     assert it.position == pytest.approx((0.05, 0.0, 0.1)) and it.clip_raw == pytest.approx(0.2)
     assert it.clip_button
+
+
+def test_scripted_motion_dips_into_the_tissue_and_returns():
+    m = ScriptedMotion(home=(-0.1, 0.0, 0.08), amplitude=(0.02, 0.03, 0.015), dip_depth=0.12, dip_period=20.0,
+                       dip_duration=8.0, dip_start=5.0)
+    assert m.dip_weight(4.9) == 0.0 and m(4.9).position[2] > 0.06
+    held = m(9.0).position                      # middle of the dip: held at the start point, lowered
+    assert held == pytest.approx((-0.1, 0.03, 0.08 - 0.12))
+    assert 0.0 < m.dip_weight(6.0) < 1.0        # smooth ramp
+    assert m.dip_weight(13.5) == 0.0            # back on the path
+    assert m(29.0).position == pytest.approx(held)  # periodic
+    assert ScriptedMotion(dip_period=0.0).dip_weight(9.0) == 0.0

@@ -4,9 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include "saras_teleop/energy_tank.h"
 #include "saras_teleop/transparency.h"
 #include "saras_teleop/twist_estimator.h"
 
+using saras_teleop::EnergyTank;
+using saras_teleop::TankParams;
 using saras_teleop::TransparencyChannel;
 using saras_teleop::TransparencyParams;
 using saras_teleop::TwistEstimator;
@@ -44,6 +47,74 @@ TEST(Transparency, WaitsThenComputesSetPoints)
   ch.setSlavePosition(Eigen::Vector3d(0.105, 0.2, 0.3));
   ch.update(w, v);
   EXPECT_NEAR(w.norm(), 0.0, 1e-12);
+}
+
+TEST(Transparency, ContactForceReflectedScaledAndSwitchable)
+{
+  TransparencyParams p;
+  p.contact_force_scale = 0.5;
+  for (bool on : {true, false})
+  {
+    p.contact_feedback = on;
+    TransparencyChannel ch(p);
+    Vector6d w, v;
+    ch.setMasterPosition(Eigen::Vector3d::Zero());
+    ch.setSlavePosition(Eigen::Vector3d::Zero());
+    ch.update(w, v);
+    EXPECT_TRUE(ch.setContactForce(Eigen::Vector3d(0.3, -0.4, 2.0)));  // tissue pushing the tool back [N]
+    EXPECT_FALSE(ch.setContactForce(Eigen::Vector3d(NAN, 0.0, 0.0)));  // rejected, previous kept
+    ch.update(w, v);
+    if (on)
+      EXPECT_NEAR((w.head<3>() - 0.5 * Eigen::Vector3d(0.3, -0.4, 2.0)).norm(), 0.0, 1e-12);
+    else
+      EXPECT_NEAR(w.norm(), 0.0, 1e-12);
+  }
+  p.contact_force_scale = -1.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// The operator pushes the tool into tissue: the contact force (depth x K_skin along the outward
+// normal) reaches the hand through transparency and tank_master, in its direction and within 10 %
+// of force x contact_force_scale, while the tank keeps T >= T_min (it absorbs: the force opposes
+// the motion).
+TEST(Transparency, ContactForceReachesTheHandThroughTheMasterTank)
+{
+  TransparencyParams p;
+  p.contact_force_scale = 0.5;
+  TransparencyChannel ch(p);
+  EnergyTank tank(TankParams(), 1);
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.2, -0.3, 1.0).normalized();  // outward, slave base frame
+  const double k_skin = 500.0, dt = 1e-3, speed = 0.004;  // [N/m], [s], [m/s] master speed into the tissue
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  ch.setMasterPosition(m);
+  ch.setSlavePosition(m);
+  Vector6d w, v, twist = Vector6d::Zero();
+  twist.head<3>() = -speed * normal;
+  double worst = 0.0;
+  for (int k = 1; k <= 2000; ++k)
+  {
+    m += dt * twist.head<3>();
+    ch.setMasterPosition(m);
+    ch.setSlavePosition(p.scale_factor * m);  // the slave follows (the tissue does not stop it)
+    ch.setMasterTwist(twist);
+    const double depth = p.scale_factor * speed * k * dt;
+    const Eigen::Vector3d f_contact = depth * k_skin * normal;
+    ch.setContactForce(f_contact);
+    ch.update(w, v);
+    tank.setDesired(0, w);
+    tank.setConjugate(0, twist);
+    ASSERT_TRUE(tank.step(dt, 0.0, 0.0));
+    const Eigen::Vector3d hand = tank.output(0).head<3>();
+    const Eigen::Vector3d expected = p.contact_force_scale * f_contact;
+    if (expected.norm() > 0.1)  // [N] the damping alone dominates near zero
+    {
+      EXPECT_GT(hand.dot(normal), 0.0) << "the hand is pushed out of the tissue";
+      worst = std::max(worst, (hand - expected).norm() / expected.norm());
+    }
+  }
+  EXPECT_LT(worst, 0.10);
+  EXPECT_GE(tank.energy(), TankParams().T_min);
+  EXPECT_GT(tank.energy(), TankParams().T_init);  // the reflected force absorbed energy
 }
 
 TEST(Transparency, ClutchReindexesWithoutJump)

@@ -87,6 +87,27 @@ bool intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info, CameraIntrins
   return intrinsicsFromCameraModel(model, out, error);
 }
 
+bool stereoCalibrationFromCameraInfo(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right,
+                                     StereoCalibration* calibration, std::string* error)
+{
+  image_geometry::PinholeCameraModel model[2];
+  model[0].fromCameraInfo(left);
+  model[1].fromCameraInfo(right);
+  StereoCalibration c;
+  CameraIntrinsics* k[2] = {&c.left, &c.right};
+  cv::Matx33d* R[2] = {&c.R_left, &c.R_right};
+  cv::Matx34d* P[2] = {&c.P_left, &c.P_right};
+  for (int e = 0; e < 2; ++e)
+  {
+    if (!intrinsicsFromCameraModel(model[e], k[e], error))
+      return false;
+    *R[e] = model[e].rotationMatrix();
+    *P[e] = model[e].projectionMatrix();  // binning and ROI applied, as K
+  }
+  *calibration = c;
+  return true;
+}
+
 const std::string& EyeCamera::update(const sensor_msgs::CameraInfo& info, std::uint32_t width, std::uint32_t height)
 {
   if (model_.fromCameraInfo(info) || !seen_)

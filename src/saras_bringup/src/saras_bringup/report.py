@@ -220,6 +220,33 @@ def plot_forces(data, t0):
     return fig
 
 
+def plot_contact_depths(data, t0):
+    """Estimated (ContactEstimator, /mesa_<s>/contact_estimate) vs true (contact_sim) depth per tool."""
+    if not any(data.get('/mesa_%s/contact_truth' % s) or data.get('/mesa_%s/contact_estimate' % s) for s in SIDES):
+        return None
+    fig, axes = plt.subplots(len(SIDES), 1, figsize=(9, 5), sharex=True)
+    for ax, side in zip(axes, SIDES):
+        truth = data.get('/mesa_%s/contact_truth' % side, [])
+        if truth:
+            ax.plot([t - t0 for t, _ in truth], [1e3 * m.depth for _, m in truth], 'k-', lw=1.2,
+                    label='true (contact_sim)')
+        est = data.get('/mesa_%s/contact_estimate' % side, [])
+        known = [(t, m.data[2]) for t, m in est if len(m.data) > 2 and m.data[1] > 0.5]
+        unknown = [t for t, m in est if len(m.data) > 2 and m.data[1] <= 0.5]
+        if known:
+            ax.plot([t - t0 for t, _ in known], [1e3 * d for _, d in known], '.', ms=3, color='tab:blue',
+                    label='estimated (stereo)')
+        if unknown:
+            ax.plot([t - t0 for t in unknown], [0.0] * len(unknown), '|', ms=6, color='tab:gray',
+                    label='estimate unknown')
+        ax.set_ylabel('%s depth [mm]' % side)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc='upper right')
+    axes[0].set_title('Contact depth: vision estimate vs ground truth (D7.2 Section 8)')
+    axes[-1].set_xlabel('time [s]')
+    return fig
+
+
 def find_param(params, key):
     """First value of ``key`` anywhere in a nested rosparam dump (or None)."""
     if isinstance(params, dict):
@@ -273,6 +300,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
             limits[key] = float(v)
     topics = ['/teleop/%s/master_pose' % s for s in SIDES] + ['/mesa_%s/ee_pose' % s for s in SIDES]
     topics += ['/mesa_%s/target_pose' % s for s in SIDES] + ['/mesa_%s/contact_force' % s for s in SIDES]
+    topics += ['/mesa_%s/contact_truth' % s for s in SIDES] + ['/mesa_%s/contact_estimate' % s for s in SIDES]
     topics += ['/collision/distances', '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
     topics += ['/dvrk/MTMR/position_cartesian_current', '/dvrk/PSM1/position_cartesian_current']
     topics += list(PEDAL_TOPICS.values())
@@ -298,6 +326,9 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
                '/teleop/tank_master/energy and /teleop/tank_slave/energy')
     rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
                '/mesa_left/contact_force, /mesa_right/contact_force')
+    rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
+               '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
+               '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
             with open(os.path.join(out_dir, rel)) as stream:

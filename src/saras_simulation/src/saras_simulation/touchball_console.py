@@ -73,11 +73,19 @@ class ScriptedMotion(object):
     Lissajous path; orientation: nominal rpy + small roll/pitch oscillation; raw clip reading
     0.5 + 0.5 sin(2 pi f_clip t); clutch pressed for ``clutch_duration`` every ``clutch_period``
     seconds (0 disables).
+
+    Tissue contact (D7.2 Section 8 force path): every ``dip_period`` seconds from ``dip_start``,
+    the hand leaves the path for ``dip_duration`` seconds and pushes down to the path's start
+    point lowered by ``dip_depth`` [m] (master space; the slave goes ``scale_factor`` times as far:
+    with the default 0.12 m and scale 0.5 the tools, ~5 cm above the tissue at the start, press a
+    few mm into it), with smooth (raised-cosine) transitions over a quarter of the dip each, held
+    in between. ``dip_period`` 0 disables.
     """
 
     def __init__(self, home=(-0.10, 0.0, 0.08), amplitude=(0.02, 0.03, 0.015),
                  frequency=(0.2, 0.13, 0.17), rpy=(0.0, 0.0, 0.0), rpy_amplitude=0.15,
-                 clip_frequency=0.25, clutch_period=0.0, clutch_duration=1.0, phase=0.0):
+                 clip_frequency=0.25, clutch_period=0.0, clutch_duration=1.0, phase=0.0,
+                 dip_depth=0.12, dip_period=20.0, dip_duration=9.0, dip_start=5.0):
         self.home = tuple(home)
         self.amplitude = tuple(amplitude)
         self.frequency = tuple(frequency)
@@ -87,6 +95,8 @@ class ScriptedMotion(object):
         self.clutch_period = float(clutch_period)
         self.clutch_duration = float(clutch_duration)
         self.phase = float(phase)
+        self.dip_depth, self.dip_period = float(dip_depth), float(dip_period)
+        self.dip_duration, self.dip_start = float(dip_duration), float(dip_start)
         self._w = tuple(2.0 * math.pi * f for f in self.frequency)     # [rad/s]
 
     def __call__(self, t):
@@ -95,6 +105,10 @@ class ScriptedMotion(object):
         pos = (self.home[0] + self.amplitude[0] * math.sin(w[0] * t),
                self.home[1] + self.amplitude[1] * math.sin(w[1] * t + math.pi / 2),
                self.home[2] + self.amplitude[2] * math.sin(w[2] * t))
+        b = self.dip_weight(t)
+        if b > 0.0:
+            target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
+            pos = tuple((1.0 - b) * p + b * g for p, g in zip(pos, target))
         a = self.rpy_amplitude
         q = quat_from_rpy(self.rpy[0] + a * math.sin(w[1] * t), self.rpy[1] + a * math.sin(w[0] * t),
                           self.rpy[2])
@@ -102,6 +116,17 @@ class ScriptedMotion(object):
         clutch = (self.clutch_period > 0.0 and
                   (t % self.clutch_period) > self.clutch_period - self.clutch_duration)
         return Intention(pos, q, clip, clutch, clip > 0.9)
+
+
+    def dip_weight(self, t):
+        """Blend weight [0, 1] of the contact dip at script time ``t`` [s]."""
+        if self.dip_period <= 0.0 or t < self.dip_start:
+            return 0.0
+        u = ((t - self.dip_start) % self.dip_period) / self.dip_duration
+        if u >= 1.0:
+            return 0.0
+        ramp = min(u, 1.0 - u) * 4.0          # quarter up, half held, quarter down
+        return 1.0 if ramp >= 1.0 else 0.5 - 0.5 * math.cos(math.pi * ramp)
 
 
 CSV_FIELDS = ('x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'clip', 'clutch', 'clip_button')

@@ -42,7 +42,7 @@ class ContactAudioTest(unittest.TestCase):
 
     def contact_for(self, p, n=10):
         got = []
-        sub = rospy.Subscriber('/mesa_left/contact', Contact, got.append)
+        sub = rospy.Subscriber('/mesa_left/contact_truth', Contact, got.append)
         end = rospy.Time.now() + rospy.Duration(1.5)
         while rospy.Time.now() < end:
             self.send_tip(p)
@@ -69,7 +69,7 @@ class ContactAudioTest(unittest.TestCase):
         np.testing.assert_allclose(R_wb @ d, nrm, atol=1e-6)
         outside = self.contact_for([x, y, h + 0.01])
         self.assertEqual(outside.depth, 0.0)
-        right = rospy.wait_for_message('/mesa_right/contact', Contact, 5.0)
+        right = rospy.wait_for_message('/mesa_right/contact_truth', Contact, 5.0)
         self.assertEqual(right.depth, 0.0)
         self.assertGreater(abs(right.direction.z), 0.0)   # never a zero vector
         st = []
@@ -89,7 +89,7 @@ class ContactAudioTest(unittest.TestCase):
         st = []
         sub = diag_status.subscribe(st)
         right = []
-        rsub = rospy.Subscriber('/mesa_right/contact', Contact, right.append)
+        rsub = rospy.Subscriber('/mesa_right/contact_truth', Contact, right.append)
         end = rospy.Time.now() + rospy.Duration(2.5)
         while rospy.Time.now() < end:
             m = PointStamped()

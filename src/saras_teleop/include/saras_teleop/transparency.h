@@ -5,12 +5,16 @@
  * State WAITING until a master pose and a slave pose have been received; then the initial
  * positions m0, s0 are stored and the channel RUNS:
  *
- *   des_wrench = [ K * ((s - s0) / scale - (m - m0)) + f_fixture ; tau_fixture ]   (master side) [N, N m]
+ *   des_wrench = [ K * ((s - s0) / scale - (m - m0)) + f_fixture + c * f_contact ; tau_fixture ]  (master) [N, N m]
  *   des_twist  = [ scale * v_master ; rotation_scale * w_master ]                 (slave side) [m/s, rad/s]
  *
  * all expressed in the slave base frame. The position error is compared in master space, so the
  * scale factor does not create a spurious force in free motion (the deliverable compares
  * (s - s0) - (m - m0), which is only right for scale 1). While the clutch is pressed or the master
+ * f_contact is the force of the tissue on the tool (D7.2 Section 8 contact force, slave base frame),
+ * reflected on the operator's hand scaled by c = contact_force_scale while contact_feedback is on; it
+ * enters des_wrench, so tank_master lets through only what its energy allows (passivity kept).
+ * While the clutch is pressed or the master
  * link is stale the channel HOLDS (zero wrench and twist); on leaving HOLD the offsets are re-indexed
  * (m0 = m, s0 = s), so the commanded force does not jump. The force is saturated to max_force.
  */
@@ -31,6 +35,8 @@ struct TransparencyParams
   double scale_factor = 0.5;       ///< slave translation / master translation [-]
   double rotation_scale = 1.0;     ///< slave rotation rate / master rotation rate [-]
   double max_force = 3.0;          ///< saturation of |des force| [N] (Touch: 3.3 N peak)
+  bool contact_feedback = true;    ///< reflect the contact force on the master
+  double contact_force_scale = 0.5;  ///< master force / contact force [-] (= scale_factor: power-consistent)
   /// Throws std::invalid_argument naming the offending parameter.
   void validate() const;
 };
@@ -55,6 +61,8 @@ public:
   bool setSlavePosition(const Eigen::Vector3d& s);
   /// Virtual-fixture wrench [N, N m] in the slave base frame (zero to clear).
   bool setFixtureWrench(const Vector6d& w);
+  /// Contact force of the tissue on the tool [N] in the slave base frame (zero to clear).
+  bool setContactForce(const Eigen::Vector3d& f);
   void setClutch(bool pressed) { clutch_ = pressed; }
   void setLinkOk(bool ok) { link_ok_ = ok; }
 
@@ -74,6 +82,7 @@ private:
   Eigen::Vector3d m0_ = Eigen::Vector3d::Zero(), s0_ = Eigen::Vector3d::Zero();
   Vector6d v_ = Vector6d::Zero();
   Vector6d fixture_ = Vector6d::Zero();
+  Eigen::Vector3d contact_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace saras_teleop

@@ -87,6 +87,7 @@ SimResult runSimulation(const SimParams& p)
       tr.setMasterTwist(m.twist);
     });
     tr.setSlavePosition(s);
+    tr.setContactForce(contact_sample.head<3>());  // reflected on the master (contact_feedback)
     Vector6d des_w, des_v;
     tr.update(des_w, des_v);
     bwd.push(des_w, t);

@@ -16,6 +16,8 @@ void TransparencyParams::validate() const
     throw std::invalid_argument("parameter 'rotation_scale' must be finite and >= 0");
   if (!(std::isfinite(max_force) && max_force > 0.0))
     throw std::invalid_argument("parameter 'max_force' must be finite and > 0 N");
+  if (!(std::isfinite(contact_force_scale) && contact_force_scale >= 0.0))
+    throw std::invalid_argument("parameter 'contact_force_scale' must be finite and >= 0");
 }
 
 TransparencyChannel::TransparencyChannel(const TransparencyParams& p) : p_(p)
@@ -57,6 +59,14 @@ bool TransparencyChannel::setFixtureWrench(const Vector6d& w)
   return true;
 }
 
+bool TransparencyChannel::setContactForce(const Eigen::Vector3d& f)
+{
+  if (!f.allFinite())
+    return false;
+  contact_ = f;
+  return true;
+}
+
 TransparencyChannel::State TransparencyChannel::update(Vector6d& des_wrench, Vector6d& des_twist)
 {
   des_wrench.setZero();
@@ -84,6 +94,8 @@ TransparencyChannel::State TransparencyChannel::update(Vector6d& des_wrench, Vec
   }
   const Eigen::Vector3d err = (s_ - s0_) / p_.scale_factor - (m_ - m0_);
   Eigen::Vector3d f = p_.pose_error_gain * err + fixture_.head<3>();
+  if (p_.contact_feedback)
+    f += p_.contact_force_scale * contact_;
   const double n = f.norm();
   if (n > p_.max_force)
     f *= p_.max_force / n;

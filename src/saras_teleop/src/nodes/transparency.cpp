@@ -5,19 +5,23 @@
  * Per channel c (relative names): sub c/master_pose (PoseStamped, slave base frame), c/master_twist
  * (TwistStamped), c/slave_pose (PoseStamped, measured slave pose), c/device_state
  * (saras_msgs/HapticDeviceState: clutch, stale), c/fixture_wrench (WrenchStamped, optional virtual
- * fixture in the slave base frame); sub link_status (saras_msgs/ComponentStatus, STALE => hold);
+ * fixture in the slave base frame), c/contact_force (geometry_msgs/Twist, linear = force of the
+ * tissue on the tool [N] in the slave base frame, D7.2 Section 8; reflected on the master scaled by
+ * contact_force_scale while contact_feedback is true); sub link_status (saras_msgs/ComponentStatus, STALE => hold);
  * pub c/des_wrench (WrenchStamped), c/des_twist (TwistStamped), both in mesa_<c>/sbs_world.
  * Computes a channel when its master twist arrives (event-driven, stamps propagated); a ~rate
  * timer recomputes a channel whose twists stopped and publishes zero set-points once it holds
  * (inputs older than ~input_timeout, clutch, link STALE).
  * Params: pose_error_gain [N/m], scale_factor, rotation_scale, max_force [N], rate [Hz],
- * input_timeout [s] (master/slave inputs older than this => hold), fixture_timeout [s].
+ * input_timeout [s] (master/slave inputs older than this => hold), fixture_timeout [s],
+ * contact_feedback (bool), contact_force_scale [-], contact_timeout [s] (older contact force => zero).
  */
 #include <memory>
 #include <string>
 #include <vector>
 
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/Twist.h>
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -46,11 +50,15 @@ public:
     p.scale_factor = prm.number("scale_factor", p.scale_factor, "", { positive() });
     p.rotation_scale = prm.number("rotation_scale", p.rotation_scale, "", { nonNegative() });
     p.max_force = prm.number("max_force", p.max_force, "N", { positive() });
+    p.contact_feedback = prm.flag("contact_feedback", p.contact_feedback);
+    p.contact_force_scale = prm.number("contact_force_scale", p.contact_force_scale, "", { nonNegative() });
     p.validate();
+    contact_feedback_ = p.contact_feedback;
     const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
     input_timeout_ = prm.number("input_timeout", 0.1, "s", { positive() });
     fixture_timeout_ = prm.number("fixture_timeout", 0.2, "s", { positive() });
+    contact_timeout_ = prm.number("contact_timeout", 0.2, "s", { positive() });
     const std::vector<std::string> channels = paramChannels(prm);
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
@@ -89,6 +97,10 @@ public:
           n + "/fixture_wrench", 10,
           [this, i](const geometry_msgs::WrenchStamped::ConstPtr& m) { onFixture(i, *m); }, ros::VoidConstPtr(),
           fast));
+      if (p.contact_feedback)
+        c.subs.push_back(nh.subscribe<geometry_msgs::Twist>(
+            n + "/contact_force", 10, [this, i](const geometry_msgs::Twist::ConstPtr& m) { onContactForce(i, *m); },
+            ros::VoidConstPtr(), fast));
     }
     link_sub_ = nh.subscribe("link_status", 10, &TransparencyNode::onLinkStatus, this, fast);
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TransparencyNode::onTimer, this);
@@ -105,7 +117,8 @@ private:
     ros::Publisher pub_wrench, pub_twist;
     std::unique_ptr<MessagePool<geometry_msgs::WrenchStamped>> wrench_pool;
     std::unique_ptr<MessagePool<geometry_msgs::TwistStamped>> twist_pool;
-    ros::Time t_master, t_slave, t_fixture, t_last;
+    ros::Time t_master, t_slave, t_fixture, t_contact, t_last;
+    double contact_norm = 0.0;  ///< |contact force| [N] last received
     bool clutch = false, device_stale = false;
     TransparencyChannel::State state = TransparencyChannel::WAITING;
   };
@@ -150,6 +163,15 @@ private:
     ch_[i].t_fixture = ros::Time::now();
   }
 
+  void onContactForce(std::size_t i, const geometry_msgs::Twist& m)
+  {
+    const Eigen::Vector3d f(m.linear.x, m.linear.y, m.linear.z);
+    if (!ch_[i].core->setContactForce(f))
+      return bad(ch_[i].name + "/contact_force");
+    ch_[i].t_contact = ros::Time::now();
+    ch_[i].contact_norm = f.norm();
+  }
+
   void onLinkStatus(const saras_msgs::ComponentStatus::ConstPtr& m)
   {
     link_ok_ = m->level != saras_msgs::ComponentStatus::STALE;
@@ -166,6 +188,12 @@ private:
     {
       c.core->setFixtureWrench(Vector6d::Zero());
       c.t_fixture = ros::Time();
+    }
+    if (!c.t_contact.isZero() && (now - c.t_contact).toSec() > contact_timeout_)
+    {
+      c.core->setContactForce(Eigen::Vector3d::Zero());
+      c.t_contact = ros::Time();
+      c.contact_norm = 0.0;
     }
     c.core->setClutch(c.clutch);
     c.core->setLinkOk(link_ok_ && !c.device_stale && (fresh || c.state == TransparencyChannel::WAITING));
@@ -227,11 +255,13 @@ private:
       if (state != "running")
         msg += c.name + ": " + state + "; ";
       s.add(c.name + " state", state);
+      s.add(c.name + " contact force [N]", c.contact_norm);
     }
     s.summary(static_cast<unsigned char>(level), msg.empty() ? "running" : msg);
     s.add("input age [s]", age);
     s.add("set-point rate [Hz]", published_.rate());
     s.add("link ok", link_ok_);
+    s.add("contact force feedback", contact_feedback_);
     s.add("received", received_);
     s.add("rejected", rejected_);
   }
@@ -242,7 +272,8 @@ private:
   ros::SteadyTimer timer_;
   std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
   RateMeter published_;             // des_twist + des_wrench pairs, all channels
-  double period_ = 0.001, input_timeout_ = 0.1, fixture_timeout_ = 0.2;
+  double period_ = 0.001, input_timeout_ = 0.1, fixture_timeout_ = 0.2, contact_timeout_ = 0.2;
+  bool contact_feedback_ = true;
   bool link_ok_ = true;
   uint64_t received_ = 0, rejected_ = 0;
 };

@@ -19,6 +19,7 @@
 #include "saras_visual_feedback/frame_composer.h"
 #include "saras_visual_feedback/pose_history.h"
 #include "saras_visual_feedback/raw_projector.h"
+#include "saras_visual_feedback/stereo_contact.h"
 
 namespace saras_visual_feedback
 {
@@ -33,6 +34,14 @@ bool intrinsicsFromCameraModel(const image_geometry::PinholeCameraModel& model, 
 
 /// intrinsicsFromCameraModel() of a PinholeCameraModel built from @p info.
 bool intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info, CameraIntrinsics* intrinsics, std::string* error);
+
+/**
+ * @brief The stereo calibration of a pair of camera_info (image_geometry::StereoCameraModel:
+ *        raw K and D, rectification R and projection P of each eye).
+ * @return false with a reason in @p error for an uncalibrated or malformed pair.
+ */
+bool stereoCalibrationFromCameraInfo(const sensor_msgs::CameraInfo& left, const sensor_msgs::CameraInfo& right,
+                                     StereoCalibration* calibration, std::string* error);
 
 /// One eye's camera: image_geometry's model of its camera_info and the raw projector built from it.
 class EyeCamera

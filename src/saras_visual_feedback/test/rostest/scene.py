@@ -80,7 +80,8 @@ def eye_messages(eye, stamp, data):
     info.D = D
     info.K = K
     info.R = [1, 0, 0, 0, 1, 0, 0, 0, 1]
-    info.P = [K[0], 0, K[2], 0, 0, K[4], K[5], 0, 0, 0, 1, 0]
+    # stereo pair with a 5 mm baseline (right P: Tx = -fx * B), as the simulated endoscope's
+    info.P = [K[0], 0, K[2], -K[0] * 0.005 if eye == 'right' else 0.0, 0, K[4], K[5], 0, 0, 0, 1, 0]
     img = Image()
     img.header = info.header
     img.width, img.height = WIDTH, HEIGHT
