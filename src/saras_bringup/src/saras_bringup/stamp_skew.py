@@ -1,0 +1,69 @@
+"""Stamp skew of each machine's streams in a recording: header stamp vs the recorder's receive time.
+
+A stream's skew is the median over its messages of ``receive time - header.stamp`` [s] (the
+recorder runs on the core PC, whose clock is the reference): transport latency makes it a few
+milliseconds positive; a publisher whose clock runs ahead of the core PC's makes it negative by the
+offset, one whose clock runs behind makes it larger by the offset. A machine's skew is the median
+of its streams' skews (streams attributed to the machine of the node that published them, the
+bag's connection header ``callerid``). ``flag_machines`` flags the machines whose skew is outside
+``[-max_skew, +max_skew]``.
+"""
+import statistics
+
+
+class SkewSamples(object):
+    """receive - stamp samples of one topic [s], thinned to at most ``max_samples``."""
+
+    def __init__(self, max_samples=20000):
+        self.values = []
+        self.seen = 0
+        self.max_samples = max_samples
+        self.publishers = set()
+
+    def add(self, t_receive, stamp):
+        self.seen += 1
+        step = 1 + self.seen // self.max_samples
+        if self.seen % step == 0:
+            self.values.append(t_receive - stamp)
+
+    def median(self):
+        return statistics.median(self.values) if self.values else None
+
+
+def machine_skews(topic_skews, topic_publishers, node_machine):
+    """Per machine: {'skew_ms', 'streams': {topic: skew_ms}}.
+
+    topic_skews: {topic: median skew [s]}; topic_publishers: {topic: [callerid, ...]};
+    node_machine: {node name: machine}. A topic published from several machines is left out
+    (its skew mixes clocks); a publisher missing from node_machine counts as machine '?'.
+    """
+    per = {}
+    for topic, skew in topic_skews.items():
+        if skew is None:
+            continue
+        machines = {node_machine.get(p, '?') for p in topic_publishers.get(topic, ())}
+        if len(machines) != 1:
+            continue
+        per.setdefault(machines.pop(), {})[topic] = 1e3 * skew
+    return {m: {'skew_ms': statistics.median(s.values()), 'streams': s} for m, s in per.items()}
+
+
+def flag_machines(per_machine, max_skew_ms):
+    """Problems (one line per machine) whose stamp skew is beyond +-max_skew_ms."""
+    problems = []
+    for machine, row in sorted(per_machine.items()):
+        skew = row['skew_ms']
+        if abs(skew) > max_skew_ms:
+            how = 'ahead of' if skew < 0 else 'behind'
+            problems.append('machine %s: header stamps %.1f ms %s the recorder\'s clock (median of %d streams; '
+                            'limit %.0f ms): check its clock (clock_monitor, chrony)'
+                            % (machine, abs(skew), how, len(row['streams']), max_skew_ms))
+    return problems
+
+
+def format_machines(per_machine, max_skew_ms):
+    lines = ['%-14s %10s %8s  %s' % ('machine', 'skew[ms]', 'streams', 'status')]
+    for machine, row in sorted(per_machine.items()):
+        status = 'STAMP SKEW' if abs(row['skew_ms']) > max_skew_ms else 'ok'
+        lines.append('%-14s %10.1f %8d  %s' % (machine, row['skew_ms'], len(row['streams']), status))
+    return '\n'.join(lines)
