@@ -182,7 +182,8 @@ def check_bag(bag_path, config, topics=None, skews=None):
             if header is not None and header[1] > 0:
                 sk = skews.setdefault(topic, SkewSamples())
                 sk.add(tr, ts)
-                sk.publishers.add(conn.get('callerid', '?'))
+                caller = conn.get('callerid', b'?')
+                sk.publishers.add(caller.decode() if isinstance(caller, bytes) else caller)
             if topic in last_t:
                 intervals[topic].append(ts - last_t[topic])
             last_t[topic] = ts

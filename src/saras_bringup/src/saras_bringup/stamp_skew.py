@@ -17,14 +17,19 @@ class SkewSamples(object):
     def __init__(self, max_samples=20000):
         self.values = []
         self.seen = 0
+        self.step = 1
         self.max_samples = max_samples
         self.publishers = set()
 
     def add(self, t_receive, stamp):
+        """One message: every step-th is kept; when full, every other kept one goes, step doubles."""
         self.seen += 1
-        step = 1 + self.seen // self.max_samples
-        if self.seen % step == 0:
-            self.values.append(t_receive - stamp)
+        if self.seen % self.step:
+            return
+        self.values.append(t_receive - stamp)
+        if len(self.values) >= self.max_samples:
+            self.values = self.values[::2]
+            self.step *= 2
 
     def median(self):
         return statistics.median(self.values) if self.values else None
