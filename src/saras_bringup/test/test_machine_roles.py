@@ -32,7 +32,8 @@ def node_key(n):
 
 
 def node_sig(n):
-    return (n.package, n.type, n.args, tuple(sorted(n.remap_args)), n.launch_prefix or '', n.required)
+    args = ' '.join(os.path.normpath(a) if a.startswith('/') else a for a in n.args.split())
+    return (n.package, n.type, args, tuple(sorted(n.remap_args)), n.launch_prefix or '', n.required)
 
 
 def nodes(cfg):
@@ -98,7 +99,7 @@ def test_roles_partition_platform(platform, roles):
 
 def test_cluster_puts_each_node_on_its_role_machine(cluster, roles):
     owner = {name: role for role, cfg in roles.items() for name in nodes(cfg)}
-    assert sorted(cluster.machines) == sorted(ROLES)
+    assert sorted(m for m in cluster.machines if m) == sorted(ROLES)  # '' is roslaunch's local default
     for n in cluster.nodes:
         assert n.machine_name == owner[node_key(n)], node_key(n)
     for role in ROLES:
@@ -127,6 +128,7 @@ def test_cluster_addresses_are_the_machines(cluster):
 def test_relay_ports_reach_the_right_nodes():
     """A relay in a link: the client's target and the server's listening port are separate arguments."""
     cfg = load(os.path.join(LAUNCH, 'cluster.launch'), left_arm_host='10.77.0.11', left_arm_port='15001',
+               left_arm_serve_port='5001',
                console_target='10.77.0.13', console_target_port='16000', console_listen_port='5016',
                **CLUSTER_ADDR)
     p = params(cfg)
