@@ -7,7 +7,7 @@ Everywhere: every required stream is recorded, every required periodic stream re
 recording.yaml's rate, "control" streams at the demo's CONTROL_RATE), and the demo's exit status
 agrees with its bag check. On machines with >= 4 cores the demo must also pass its full bag check
 (no lost messages), i.e. exit 0. On smaller machines scripts/demo.sh lowers the control rate and the
-endoscope size (README "Resource budget"); a stream that then drops a message is reported by the
+endoscope size (README "Known limitations"); a stream that then drops a message is reported by the
 demo but does not fail this test, a stream below 80 % of its configured rate does."""
 import json
 import os

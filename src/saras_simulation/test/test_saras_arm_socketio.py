@@ -296,8 +296,8 @@ def _slow_reader(client, seconds):
 def test_slow_reader_state_age_bounded_by_flow_control(window):
     # a reader at <= 100 states/s against a 300 Hz stream for 4 s: with flow control the server
     # keeps <= window states in flight and skips the rest, so the age of a received state stays
-    # near window / (read rate) = 0.3 s; without it (window 0, the old protocol) the kernel's
-    # socket buffers hold a growing backlog (measured 2.7 s at the end)
+    # near window / (read rate) = 0.3 s; without it (window 0: no flow control) the kernel's
+    # socket buffers hold a growing backlog
     model, server, port = _stream(state_rate=300.0)
     got = []
     client = SarasArmClient('http://127.0.0.1:%d' % port, subscribe_state=True, hold_on_connect=False,

@@ -17,11 +17,11 @@ validates the states in order and calls ``on_state``. A short burst is delivered
 consumer slower than the stream for longer loses the oldest states (counted in ``conflated``)
 instead of queueing them without bound, and the reader keeps draining the socket, so Engine.IO
 pings are answered on time however slow the consumer is (a backlog of states in front of a ping
-used to drop the link on a loaded host). A *reader* slower than the stream (a process starved of
+would drop the link on a loaded host). A *reader* slower than the stream (a process starved of
 CPU) is bounded by flow control: the client subscribes with ``state_window`` and reports the states
 it received (``state_ack`` every window/3), and the server keeps at most ``state_window`` states in
-flight, skipping samples beyond it. Without it, the kernel's autotuned socket buffers held seconds
-of states in front of such a reader (measured: 2.7 s after 4 s at a third of the stream rate).
+flight, skipping samples beyond it. Without it, the kernel's autotuned socket buffers hold seconds
+of states in front of such a reader.
 """
 
 import collections
