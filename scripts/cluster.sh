@@ -20,6 +20,7 @@
 #                     (needs an IMPAIR_* setting, e.g. IMPAIR_DELAY_MS=0; for the time-to-hold)
 #   FAKETIME_MACHINE, FAKETIME   run that (non-core) machine's nodes with its clock shifted by
 #                     FAKETIME seconds (libfaketime; e.g. dvrk_pc +0.05)
+#   SARAS_NETNS_PREFIX, SARAS_NETNS_SUBNET, SARAS_NETNS_RUN   as scripts/cluster/netns.sh
 # Exit: 0 all required streams recorded, 1 problems (named), 2 no start, 77 not root (skipped).
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -35,18 +36,21 @@ source "$here/cluster/run_lib.sh"
 OUT="$(realpath -m "$OUT")"; REPORT="$OUT/report"; RUNLOG="$OUT/run"
 mkdir -p "$REPORT" "$RUNLOG"
 rm -f "$OUT"/cluster.bag "$OUT"/cluster.bag.active "$REPORT"/*.png "$RUNLOG"/*
-export SARAS_NETNS_RUN="${SARAS_NETNS_RUN:-/tmp/saras_cluster}"
+export SARAS_NETNS_RUN="${SARAS_NETNS_RUN:-/tmp/${SARAS_NETNS_PREFIX:-saras}_cluster}"
 NETNS=(bash "$here/cluster/netns.sh")
 BAG="$OUT/cluster.bag"
 pids=()
 
 teardown() {
   local p
+  trap '' INT TERM  # a second Ctrl-C must not interrupt the teardown
   for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null; done
   sleep 1
   "${NETNS[@]}" down || echo "cluster: teardown incomplete (see above)"
 }
 
+# in_ns ROLE CMD...: CMD in ROLE's namespace. Started in the background, `"${NETNS[@]}" exec ... &`
+# (not this function) so that $! is CMD itself (netns.sh execs it) and stop_pid's SIGINT reaches it.
 in_ns() { "${NETNS[@]}" exec "$@"; }
 
 # write_links FILE NAME PROTO LISTEN TARGET [SOURCE]: one netem_relay links file
@@ -84,7 +88,7 @@ start_relays() {
   write_links "$RUNLOG/links_teleop.yaml" teleop_to_saras_right tcp "$t:15002" "$SARAS_ADDR_saras_right:5002"
   local role
   for role in console teleop; do
-    in_ns "${role}_pc" rosrun saras_bringup netem_relay "$RUNLOG/links_$role.yaml" --period 10 \
+    "${NETNS[@]}" exec "${role}_pc" rosrun saras_bringup netem_relay "$RUNLOG/links_$role.yaml" --period 10 \
       --json "$RUNLOG/relay_$role.json" >"$RUNLOG/relay_$role.log" 2>&1 &
     pids+=($!); eval "relay_${role}_pid=$!"
   done
@@ -96,7 +100,7 @@ start_relays() {
 
 # record_run: recorder on the core PC for DURATION s; cuts the console link at CUT_LINK_AT
 record_run() {
-  in_ns core_pc rosrun saras_bringup recorder --config "$RECORDING" --output "$BAG" __name:=recorder \
+  "${NETNS[@]}" exec core_pc rosrun saras_bringup recorder --config "$RECORDING" --output "$BAG" __name:=recorder \
     >"$OUT/recorder.log" 2>&1 &
   local record_pid=$! t
   pids=("$record_pid" "${pids[@]}")
@@ -134,12 +138,15 @@ main() {
   # shellcheck disable=SC1091
   source "$SARAS_NETNS_RUN/cluster.env"
   RECORDING="${RECORDING:-$(rospack find saras_bringup)/config/recording.yaml}"
-  launch_args=(sim:=true rviz:=false record:=false control_rate:="$CONTROL_RATE"
+  launch_args=(core_addr:="$SARAS_ADDR_core_pc" teleop_addr:="$SARAS_ADDR_teleop_pc" dvrk_addr:="$SARAS_ADDR_dvrk_pc"
+               console_addr:="$SARAS_ADDR_console_pc" saras_left_addr:="$SARAS_ADDR_saras_left"
+               saras_right_addr:="$SARAS_ADDR_saras_right"
+               sim:=true rviz:=false record:=false control_rate:="$CONTROL_RATE"
                endoscope_width:="$endo_w" endoscope_height:="$endo_h" bypass_tanks:="${BYPASS_TANKS:-false}")
   [ -n "${FAKETIME_MACHINE:-}" ] && launch_args+=(faketime_machine:="$FAKETIME_MACHINE" faketime:="$FAKETIME")
   if [ -n "${IMPAIR_DELAY_MS:-}${IMPAIR_LOSS:-}${IMPAIR_JITTER_MS:-}" ]; then start_relays; fi
   echo "cluster: roslaunch on core_pc ($SARAS_ADDR_core_pc), ${DURATION}s, control rate $CONTROL_RATE Hz, ${launch_args[*]} $*"
-  in_ns core_pc roslaunch -p 11311 "$SARAS_WS/launch/cluster.launch" "${launch_args[@]}" "$@" >"$OUT/launch.log" 2>&1 &
+  "${NETNS[@]}" exec core_pc roslaunch -p 11311 "$SARAS_WS/launch/cluster.launch" "${launch_args[@]}" "$@" >"$OUT/launch.log" 2>&1 &
   launch_pid=$!
   pids=("$launch_pid" "${pids[@]}")
   sleep 3

@@ -9,11 +9,12 @@ free_port() {
 # SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILE, the
 # 20 s count restarts whenever FILE grows: the recorder, after SIGINT, writes what it has queued
 # (up to buffer_mb of recording.yaml), which on an overloaded host can take longer than 20 s; killing
-# it then would lose the queued end of the recording.
+# it then would lose the queued end of the recording; a process still writing after 240 s is stopped.
 stop_pid() {
-  local last=-1 size t=0
+  local last=-1 size t=0 total=0
   kill -INT "$1" 2>/dev/null
-  while [ "$t" -lt 40 ] && kill -0 "$1" 2>/dev/null; do
+  while [ "$t" -lt 40 ] && [ "$total" -lt 480 ] && kill -0 "$1" 2>/dev/null; do
+    total=$((total + 1))
     if [ -n "${3:-}" ]; then
       size=$(stat -c %s "$3" 2>/dev/null || echo 0)
       if [ "$size" -ne "$last" ]; then last=$size; t=0; fi
