@@ -14,23 +14,25 @@ NODES = {'/dvrk/dvrk_sim': 'dvrk_pc', '/endoscope/endoscope_sim': 'dvrk_pc',
          '/teleop/teleop_manager': 'teleop_pc', '/mesa_left/saras_arms_state': 'teleop_pc'}
 
 
-def test_samples_median_and_thinning():
+def test_samples_low_quantile_and_thinning():
     s = SkewSamples(max_samples=100)
     for i in range(1000):
-        s.add(10.0 + i * 1e-3 + 0.004, 10.0 + i * 1e-3)
-    assert s.median() == pytest.approx(0.004, abs=1e-9)
-    assert 50 <= len(s.values) <= 200
+        s.add(10.0 + i * 1e-3 + 0.004 + (0.03 if (i + 1) % 10 else 0.0), 10.0 + i * 1e-3)
+    assert s.low(0.05) == pytest.approx(0.004, abs=1e-9)  # the 10 % fastest messages
+    assert s.low(0.5) == pytest.approx(0.034, abs=1e-9)
+    assert 50 <= len(s.values) <= 100
+    assert SkewSamples().low() is None
 
 
-def test_machine_skew_is_median_of_its_streams_and_flags_the_shifted_one():
+def test_machine_skew_is_its_lowest_stream_and_flags_the_shifted_one():
     topic_skews = {'/dvrk/PSM1/a': -0.047, '/dvrk/PSM2/a': -0.048, '/endoscope/left/c': -0.030,
                    '/teleop/left/master_pose': 0.002, '/mesa_left/ee_pose': 0.004}
     pubs = {'/dvrk/PSM1/a': ['/dvrk/dvrk_sim'], '/dvrk/PSM2/a': ['/dvrk/dvrk_sim'],
             '/endoscope/left/c': ['/endoscope/endoscope_sim'],
             '/teleop/left/master_pose': ['/teleop/teleop_manager'], '/mesa_left/ee_pose': ['/mesa_left/saras_arms_state']}
     per = machine_skews(topic_skews, pubs, NODES)
-    assert per['dvrk_pc']['skew_ms'] == pytest.approx(-47.0)
-    assert per['teleop_pc']['skew_ms'] == pytest.approx(3.0)
+    assert per['dvrk_pc']['skew_ms'] == pytest.approx(-48.0)
+    assert per['teleop_pc']['skew_ms'] == pytest.approx(2.0)
     problems = flag_machines(per, 20.0)
     assert len(problems) == 1 and 'dvrk_pc' in problems[0] and 'ahead' in problems[0]
     assert flag_machines(machine_skews({'/x': 0.08}, {'/x': ['/dvrk/dvrk_sim']}, NODES), 20.0)[0].count('behind') == 1

@@ -104,7 +104,7 @@ def machines_html(graph, links, skew=None):
         mine = [lk for lk in links if role in (lk['from'], lk['to'])]
         if mine:
             rows.append('<table><tr><th>link</th><th>protocol/port</th><th>what</th><th>relay</th></tr>%s</table>' % ''.join(
-                '<tr><td>%s &rarr; %s</td><td>%s %d</td><td>%s</td><td>%s</td></tr>' % tuple(
+                '<tr><td>%s &rarr; %s</td><td>%s %s</td><td>%s</td><td>%s</td></tr>' % tuple(
                     html.escape(str(v)) for v in (lk['from'], lk['to'], lk['protocol'], lk['port'],
                                                   lk['what'], lk['relay'] or '-')) for lk in mine))
         for key, label in (('topics_out', 'sends (TCPROS) to'), ('topics_in', 'receives (TCPROS) from')):
@@ -113,7 +113,8 @@ def machines_html(graph, links, skew=None):
                     '<code>%s</code> %s %s' % (html.escape(t), '&rarr;' if key == 'topics_out' else '&larr;',
                                                html.escape(', '.join(r))) for t, r in sorted(m[key].items()))))
         if skew and role in skew:
-            rows.append('<p>stamp skew of its recorded streams: %.1f ms (median of %d streams)</p>'
+            rows.append('<p>stamp skew of its recorded streams (receive time - header stamp, lowest 5th '
+                        'percentile): %.1f ms over %d streams</p>'
                         % (skew[role]['skew_ms'], len(skew[role]['streams'])))
         out.append(('Machine %s' % role, '\n'.join(rows)))
     return out

@@ -1,14 +1,14 @@
 """Stamp skew of each machine's streams in a recording: header stamp vs the recorder's receive time.
 
-A stream's skew is the median over its messages of ``receive time - header.stamp`` [s] (the
-recorder runs on the core PC, whose clock is the reference): transport latency makes it a few
-milliseconds positive; a publisher whose clock runs ahead of the core PC's makes it negative by the
-offset, one whose clock runs behind makes it larger by the offset. A machine's skew is the median
-of its streams' skews (streams attributed to the machine of the node that published them, the
-bag's connection header ``callerid``). ``flag_machines`` flags the machines whose skew is outside
-``[-max_skew, +max_skew]``.
+A stream's skew is the 5th percentile over its messages of ``receive time - header.stamp`` [s]
+(the recorder runs on the core PC, whose clock is the reference): transport latency makes it a
+few milliseconds positive, and a stream stamped by design before it is sent (an audio chunk by its
+first sample, a contact estimate by the pose it used) more; a publisher whose clock runs ahead of
+the core PC's makes it negative by the offset, one whose clock runs behind makes it larger by the
+offset. A machine's skew is the lowest of its streams' skews, the stream closest to its clock
+(streams attributed to the machine of the node that published them, the bag's connection header
+``callerid``). ``flag_machines`` flags the machines whose skew is outside ``[-max_skew, +max_skew]``.
 """
-import statistics
 
 
 class SkewSamples(object):
@@ -31,14 +31,18 @@ class SkewSamples(object):
             self.values = self.values[::2]
             self.step *= 2
 
-    def median(self):
-        return statistics.median(self.values) if self.values else None
+    def low(self, fraction=0.05):
+        """The ``fraction`` quantile of the samples [s] (None without samples)."""
+        if not self.values:
+            return None
+        v = sorted(self.values)
+        return v[min(len(v) - 1, int(fraction * len(v)))]
 
 
 def machine_skews(topic_skews, topic_publishers, node_machine):
-    """Per machine: {'skew_ms', 'streams': {topic: skew_ms}}.
+    """Per machine: {'skew_ms' (lowest of its streams), 'streams': {topic: skew_ms}}.
 
-    topic_skews: {topic: median skew [s]}; topic_publishers: {topic: [callerid, ...]};
+    topic_skews: {topic: skew [s]}; topic_publishers: {topic: [callerid, ...]};
     node_machine: {node name: machine}. A topic published from several machines is left out
     (its skew mixes clocks); a publisher missing from node_machine counts as machine '?'.
     """
@@ -50,7 +54,7 @@ def machine_skews(topic_skews, topic_publishers, node_machine):
         if len(machines) != 1:
             continue
         per.setdefault(machines.pop(), {})[topic] = 1e3 * skew
-    return {m: {'skew_ms': statistics.median(s.values()), 'streams': s} for m, s in per.items()}
+    return {m: {'skew_ms': min(s.values()), 'streams': s} for m, s in per.items()}
 
 
 def flag_machines(per_machine, max_skew_ms):
@@ -60,7 +64,7 @@ def flag_machines(per_machine, max_skew_ms):
         skew = row['skew_ms']
         if abs(skew) > max_skew_ms:
             how = 'ahead of' if skew < 0 else 'behind'
-            problems.append('machine %s: header stamps %.1f ms %s the recorder\'s clock (median of %d streams; '
+            problems.append('machine %s: header stamps %.1f ms %s the recorder\'s clock (lowest of %d streams; '
                             'limit %.0f ms): check its clock (clock_monitor, chrony)'
                             % (machine, abs(skew), how, len(row['streams']), max_skew_ms))
     return problems
