@@ -32,7 +32,8 @@ if [ -n "$ip_addr" ]; then
   export ROS_IP="$ip_addr"
 fi
 if [ -n "$faketime" ]; then
-  [[ "$faketime" =~ ^[+-][0-9]+(\.[0-9]+)?$ ]] || { echo "env_loader.sh: --faketime '$faketime': +S.FFF or -S.FFF" >&2; exit 2; }
+  [[ "$faketime" =~ ^[+-]?[0-9]+(\.[0-9]+)?$ ]] || { echo "env_loader.sh: --faketime '$faketime': [+-]S.FFF" >&2; exit 2; }
+  [[ "$faketime" =~ ^[+-] ]] || faketime="+$faketime"  # roslaunch's eval drops a '+'; unsigned = ahead
   lib="$(ls /usr/lib/*/faketime/libfaketime.so.1 2>/dev/null | head -n 1)"
   [ -n "$lib" ] || { echo "env_loader.sh: --faketime needs libfaketime (Debian faketime)" >&2; exit 2; }
   export LD_PRELOAD="$lib${LD_PRELOAD:+:$LD_PRELOAD}" FAKETIME="$faketime" FAKETIME_NO_CACHE=1

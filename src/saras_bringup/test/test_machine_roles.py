@@ -152,3 +152,10 @@ def test_role_files_take_addresses_as_arguments(role):
     text = ARG_DEFAULT.sub('', text)
     assert IPV4.findall(text) == []
     assert re.findall(r'value="\d{4,5}"', text) == []
+
+
+def test_faketime_applies_to_one_machine_only():
+    cfg = load(os.path.join(LAUNCH, 'cluster.launch'), faketime_machine='dvrk_pc', faketime='+0.05', **CLUSTER_ADDR)
+    loaders = {r: cfg.machines[r].env_loader for r in ROLES}
+    assert loaders['dvrk_pc'].endswith('env_loader.sh --faketime 0.05')
+    assert all(v.endswith('env_loader.sh') for r, v in loaders.items() if r != 'dvrk_pc')
