@@ -118,14 +118,12 @@ record_run() {
   stop_pid "$record_pid" "the recorder" "$BAG.active"
 }
 
-# capture: parameters, node -> machine graph, links, the clock monitor's view of every machine
+# capture: parameters, node -> machine graph, links, the clock monitor's status of every machine
 capture() {
   echo "cluster: capturing parameters, machines and clock offsets"
   in_ns core_pc rosparam dump "$OUT/params.yaml" 2>/dev/null || true
   in_ns core_pc python3 "$here/cluster/machine_graph.py" "$SARAS_NETNS_RUN/cluster.env" "$OUT/params.yaml" \
     "$OUT/machines.json" $(ls "$RUNLOG"/links_*.yaml 2>/dev/null) | tee "$RUNLOG/machines.txt"
-  in_ns core_pc timeout 15 rostopic echo -n 12 /diagnostics 2>/dev/null \
-    | grep -A12 "name: \"clock_monitor" > "$RUNLOG/clock_diagnostics.txt" || true
 }
 
 main() {
@@ -161,10 +159,8 @@ main() {
   rosrun saras_bringup bag_check "$BAG" --config "$RECORDING" --control-rate "$CONTROL_RATE" \
     --machines "$OUT/machines.json" --json "$REPORT/topics.json" | tee "$OUT/bag_check.txt"
   local check_rc=${PIPESTATUS[0]}
-  cp "$RUNLOG/clock_diagnostics.txt" "$REPORT/clock_diagnostics.txt" 2>/dev/null
   rosrun saras_bringup make_report "$BAG" "$REPORT" --check "$REPORT/topics.json" --params "$OUT/params.yaml" \
     --machines "$OUT/machines.json" \
-    --extra "Clock monitor (core PC) at the end of the run|clock_diagnostics.txt|/diagnostics of clock_monitor: offset of every machine from the core PC" \
     --summary "make cluster DURATION=$DURATION CONTROL_RATE=$CONTROL_RATE: six machines as network namespaces; ${launch_args[*]} $*"
   echo "cluster: report at $REPORT/index.html"
   exit "$check_rc"

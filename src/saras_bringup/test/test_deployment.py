@@ -24,8 +24,11 @@ def test_graph_topics_between_machines():
     assert g['machines']['teleop_pc']['topics_out'] == {'/teleop/left/master_pose': ['core_pc']}
     assert g['machines']['core_pc']['topics_in']['/teleop/left/master_pose'] == ['teleop_pc']
     assert '?' not in g['machines']
-    html = dict(machines_html(g, [], {'dvrk_pc': {'skew_ms': -48.0, 'streams': {'/a': -48.0}}}))
+    html = dict(machines_html(g, [], {'dvrk_pc': {'skew_ms': -48.0, 'streams': {'/a': -48.0}}},
+                              {'dvrk_pc': {'level': 1, 'message': 'offset +50.1 ms'}}))
     assert '-48.0 ms' in html['Machine dvrk_pc'] and '/dvrk/dvrk_sim' in html['Machine dvrk_pc']
+    assert 'clock monitor: WARN offset +50.1 ms' in html['Machine dvrk_pc']
+    assert 'clock monitor' not in html['Machine core_pc']
 
 
 def test_application_links_follow_relays():

@@ -93,9 +93,10 @@ def application_links(params, addresses, relays=()):
     return links
 
 
-def machines_html(graph, links, skew=None):
+def machines_html(graph, links, skew=None, clocks=None):
     """One HTML block per machine: its nodes, its application links, the topics it sends to and
-    receives from the other machines, and the stamp skew of its streams (bag_check --machines)."""
+    receives from the other machines, the stamp skew of its streams (bag_check --machines) and
+    the clock monitor's status of it (clocks: {machine: {level, message}})."""
     out = []
     for role, m in sorted(graph['machines'].items()):
         rows = ['<p>address <code>%s</code>, %d nodes: %s</p>' % (
@@ -116,5 +117,9 @@ def machines_html(graph, links, skew=None):
             rows.append('<p>stamp skew of its recorded streams (receive time - header stamp, lowest 5th '
                         'percentile): %.1f ms over %d streams</p>'
                         % (skew[role]['skew_ms'], len(skew[role]['streams'])))
+        if clocks and role in clocks:
+            rows.append('<p>clock monitor: %s %s</p>' % (
+                ('OK', 'WARN', 'ERROR', 'STALE')[min(3, int(clocks[role]['level']))],
+                html.escape(clocks[role]['message'])))
         out.append(('Machine %s' % role, '\n'.join(rows)))
     return out
