@@ -55,13 +55,14 @@ in_ns() { "${NETNS[@]}" exec "$@"; }
 
 # write_links FILE NAME PROTO LISTEN TARGET [SOURCE]: one netem_relay links file
 write_links() {
-  local file="$1" burst=""
+  local file="$1" burst="" new=0
+  [ -f "$file" ] || new=1
   if [ "${IMPAIR_BURST:-0}" = 1 ] && [ "$3" = udp ]; then
     # mean loss pi*loss_bad with pi = p_gb/(p_gb+p_bg): p_bg 0.25 (bursts of 4), pi = IMPAIR_LOSS
     burst="$(python3 -c "l=float('${IMPAIR_LOSS:-0.1}'); print('burst: {p_good_bad: %.5f, p_bad_good: 0.25, loss_good: 0.0, loss_bad: 1.0}' % (0.25*l/(1-l)))")"
   fi
   {
-    [ -f "$file" ] || echo "links:"
+    [ "$new" = 1 ] && echo "links:"
     echo "  - name: $2"
     echo "    protocol: $3"
     echo "    listen: $4"
