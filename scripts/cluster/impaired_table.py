@@ -11,9 +11,11 @@ import sys
 COLUMNS = [('case', '%s'), ('e0_J', '%.2f'), ('entered_J', '%.3f'), ('delivered_J', '%.3f'),
            ('net_max_J', '%.3f'), ('passive', '%s'), ('tracking_rms_mm_left', '%.2f'),
            ('tracking_rms_mm_right', '%.2f'), ('time_to_hold_s_left', '%s'), ('time_to_hold_s_right', '%s'),
+           ('robot_hold_s_left', '%s'), ('robot_hold_s_right', '%s'),
            ('exit', '%s')]
 HEAD = ['case', 'E0 [J]', 'entered [J]', 'delivered [J]', 'max net out [J]', 'passive',
-        'tracking RMS L [mm]', 'tracking RMS R [mm]', 'time-to-hold L [s]', 'time-to-hold R [s]', 'cluster.sh exit']
+        'tracking RMS L [mm]', 'tracking RMS R [mm]', 'set-point hold L [s]', 'set-point hold R [s]',
+        'robot still L [s]', 'robot still R [s]', 'cluster.sh exit']
 
 
 def cell(row, key, fmt):
@@ -21,7 +23,7 @@ def cell(row, key, fmt):
     if v is None:
         return '-'
     if isinstance(v, float) and fmt == '%s':
-        return '%.2f' % v
+        return '%.3f' % v
     return fmt % v
 
 
