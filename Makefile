@@ -2,6 +2,8 @@
 #   make demo   install what is missing, build, run the platform headless, write OUT/
 #   make test   install what is missing, build, run every test suite
 #   make faults build, run the platform and inject faults one by one, judge them (OUT/faults.md)
+#   make cluster           (root) the platform on six machines as network namespaces, report per machine
+#   make cluster-impaired  (root) the teleoperation across impaired links: delay/loss x tanks on/bypassed
 # Everything runs with Debian's /usr/bin/python3 and ROS Noetic (see scripts/env.sh).
 SHELL := /bin/bash
 DURATION ?= 30
@@ -9,8 +11,12 @@ OUT ?= $(CURDIR)/out/demo
 ARGS ?=
 CONTROL_RATE ?=
 ENDOSCOPE_SIZE ?=
+CLUSTER_OUT ?= $(CURDIR)/out/cluster
+IMPAIRED_OUT ?= $(CURDIR)/out/cluster_impaired
+IMPAIRED_DURATION ?= 20
+CASES ?=
 
-.PHONY: all setup build test demo bench faults lint run clean
+.PHONY: all setup build test demo bench faults lint run clean cluster cluster-impaired
 
 all: build
 
@@ -25,6 +31,13 @@ test: build
 
 demo: build
 	@CONTROL_RATE="$(CONTROL_RATE)" ENDOSCOPE_SIZE="$(ENDOSCOPE_SIZE)" bash scripts/demo.sh "$(DURATION)" "$(OUT)" $(ARGS)
+
+cluster: build
+	@CONTROL_RATE="$(CONTROL_RATE)" ENDOSCOPE_SIZE="$(ENDOSCOPE_SIZE)" bash scripts/cluster.sh "$(DURATION)" "$(CLUSTER_OUT)" $(ARGS); \
+	 rc=$$?; if [ $$rc = 77 ]; then echo "make cluster: skipped (needs root)"; fi; exit $$rc
+
+cluster-impaired: build
+	@CONTROL_RATE="$(CONTROL_RATE)" ENDOSCOPE_SIZE="$(ENDOSCOPE_SIZE)" bash scripts/cluster_impaired.sh "$(IMPAIRED_DURATION)" "$(IMPAIRED_OUT)" $(CASES)
 
 run: build
 	@bash -c 'source scripts/env.sh && roslaunch launch/platform.launch $(ARGS)'

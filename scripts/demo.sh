@@ -18,20 +18,15 @@ here="$(cd "$(dirname "$0")" && pwd)"
 DURATION="${1:-30}"; OUT="${2:-$here/../out/demo}"; shift $(( $# >= 2 ? 2 : $# ))
 # shellcheck disable=SC1091
 source "$here/env.sh"
+# shellcheck disable=SC1091
+source "$here/cluster/run_lib.sh"
 OUT="$(realpath -m "$OUT")"
 REPORT="$OUT/report"
 mkdir -p "$REPORT"
 rm -f "$OUT"/platform.bag "$OUT"/platform.bag.active "$REPORT"/*.png
 export ROS_HOME="$OUT/ros_home"; export ROS_LOG_DIR="$ROS_HOME/log"; mkdir -p "$ROS_LOG_DIR"
-# Throw-away keys of the authenticated console and arm links for this run only (docs/security.md):
-# mode 0600 in a 0700 directory, read by the launch files through SARAS_KEY_DIR, deleted at exit.
-export SARAS_KEY_DIR="$OUT/keys"
-rm -rf "$SARAS_KEY_DIR"
-(umask 077 && mkdir -p "$SARAS_KEY_DIR") || exit 2
-for key in console saras_arm; do
-  python3 -m saras_drivers.keys "$SARAS_KEY_DIR/$key.key" || { echo "demo: cannot create $SARAS_KEY_DIR/$key.key"; exit 2; }
-done
-port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+make_run_keys "$OUT/keys" || exit 2   # throw-away link keys of this run, deleted at exit
+port="$(free_port)"
 export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_HOSTNAME=127.0.0.1
 
 pids=()
@@ -42,29 +37,6 @@ cleanup() {
   rm -rf "$SARAS_KEY_DIR"
 }
 trap cleanup EXIT
-# stop_pid PID NAME [FILE]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and
-# SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILE, the
-# 20 s count restarts whenever FILE grows: the recorder, after SIGINT, writes what it has queued
-# (up to buffer_mb of recording.yaml), which on an overloaded host can take longer than 20 s; killing
-# it then would lose the queued end of the recording.
-stop_pid() {
-  local last=-1 size t=0
-  kill -INT "$1" 2>/dev/null
-  while [ "$t" -lt 40 ] && kill -0 "$1" 2>/dev/null; do
-    if [ -n "${3:-}" ]; then
-      size=$(stat -c %s "$3" 2>/dev/null || echo 0)
-      if [ "$size" -ne "$last" ]; then last=$size; t=0; fi
-    fi
-    sleep 0.5; t=$((t + 1))
-  done
-  if kill -0 "$1" 2>/dev/null; then
-    echo "demo: $2 did not stop, terminating it and its children"
-    pkill -TERM -P "$1" 2>/dev/null; kill -TERM "$1" 2>/dev/null; sleep 2
-    pkill -KILL -P "$1" 2>/dev/null; kill -KILL "$1" 2>/dev/null
-  fi
-  wait "$1" 2>/dev/null
-}
-
 # Virtual display for rviz (software GL); the screenshot shows what a user would see.
 display_num=$(( 90 + RANDOM % 100 ))
 Xvfb ":$display_num" -screen 0 1600x1000x24 -nolisten tcp >"$OUT/xvfb.log" 2>&1 &
@@ -72,16 +44,7 @@ pids+=($!)
 export DISPLAY=":$display_num" LIBGL_ALWAYS_SOFTWARE=1
 sleep 1
 
-if [ -z "${CONTROL_RATE:-}" ]; then
-  if [ "$(nproc)" -ge 4 ]; then CONTROL_RATE=1000; else CONTROL_RATE=250; fi
-fi
-if [ -z "${ENDOSCOPE_SIZE:-}" ]; then
-  if [ "$(nproc)" -ge 4 ]; then ENDOSCOPE_SIZE=1280x720; else ENDOSCOPE_SIZE=640x360; fi
-fi
-if ! [[ "$ENDOSCOPE_SIZE" =~ ^([0-9]+)x([0-9]+)$ ]]; then
-  echo "demo: ENDOSCOPE_SIZE must be WIDTHxHEIGHT (e.g. 1280x720), got '$ENDOSCOPE_SIZE'" >&2; exit 2
-fi
-endo_w="${BASH_REMATCH[1]}"; endo_h="${BASH_REMATCH[2]}"
+resource_defaults || exit 2
 echo "demo: platform for ${DURATION}s, ROS master :$port, display $DISPLAY, output $OUT, control rate ${CONTROL_RATE} Hz, endoscope ${endo_w}x${endo_h}"
 roslaunch -p "$port" "$SARAS_WS/launch/platform.launch" sim:=true rviz:=false record:=false \
   control_rate:="$CONTROL_RATE" endoscope_width:="$endo_w" endoscope_height:="$endo_h" "$@" >"$OUT/launch.log" 2>&1 &
@@ -100,15 +63,9 @@ rosrun saras_bringup recorder --config "$(rospack find saras_bringup)/config/rec
   --output "$OUT/platform.bag" __name:=recorder >"$OUT/recorder.log" 2>&1 &
 record_pid=$!
 pids=("$record_pid" "${pids[@]}")
-# The recorder's start-up (two rosruns, Python, 38 subscriptions) takes 5-15 s on a loaded 2-core
-# host: DURATION counts from the moment it records (bag_recorder opens platform.bag.active, then
-# subscribes; its log is block-buffered in a file, so the file is the signal).
-for ((t = 0; t < 300; t++)); do
-  [ -e "$OUT/platform.bag.active" ] && break
-  kill -0 "$record_pid" 2>/dev/null || { echo "demo: the recorder stopped; see $OUT/recorder.log"; exit 2; }
-  sleep 0.2
-done
-sleep 1
+if ! wait_recording "$record_pid" "$OUT/platform.bag"; then
+  echo "demo: the recorder stopped; see $OUT/recorder.log"; exit 2
+fi
 
 capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
 vf_start=$(( DURATION > 12 ? 2 : 0 ))
@@ -139,18 +96,14 @@ rosparam dump "$OUT/params.yaml" 2>/dev/null || true
 python3 "$here/node_graph.py" "$OUT/node_graph.md" || echo "demo: node graph capture failed"
 echo "demo: stopping the platform"
 stop_pid "$launch_pid" roslaunch
-if [ -f "$OUT/platform.bag.active" ] && [ ! -f "$OUT/platform.bag" ]; then
-  echo "demo: bag was not closed cleanly, reindexing"
-  rosbag reindex "$OUT/platform.bag.active" >/dev/null && mv "$OUT/platform.bag.active" "$OUT/platform.bag"
-fi
-if [ ! -f "$OUT/platform.bag" ]; then
+if ! close_bag "$OUT/platform.bag"; then
   echo "demo: no recording was written ($OUT/platform.bag missing)"; exit 2
 fi
 
 # rviz is not run during the recording (software GL would take a core from the 1 kHz loops); the
 # screenshot replays the recording into rviz, which also shows that `rosbag play` reproduces the scene.
 echo "demo: replaying the recording into rviz for the screenshot"
-replay_port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+replay_port="$(free_port)"
 ROS_MASTER_URI="http://127.0.0.1:$replay_port" roslaunch -p "$replay_port" saras_bringup replay.launch \
   bag:="$OUT/platform.bag" >"$OUT/replay.log" 2>&1 &
 replay_pid=$!

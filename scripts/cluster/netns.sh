@@ -238,11 +238,12 @@ cmd_status() {
   return "$ok"
 }
 
-cmd_exec() {  # cmd_exec ROLE CMD...
+cmd_exec() {  # cmd_exec ROLE CMD...: replaces this shell by CMD in ROLE's namespace
   require_root
-  local role="$1"; shift
-  ip netns exec "$(ns_of "$role")" env HOME="$RUN/home" ROS_IP="$(addr_of "$role")" \
-    ROS_MASTER_URI="http://$(addr_of "${ROLES[0]}"):11311" SARAS_ROS_IP="$(addr_of "$role")" "$@"
+  local role="$1" ns ip master; shift
+  ns="$(ns_of "$role")"; ip="$(addr_of "$role")"; master="http://$(addr_of "${ROLES[0]}"):11311"
+  # exec: CMD gets this process id, so that the caller's signals (SIGINT to stop roslaunch) reach it
+  exec ip netns exec "$ns" env HOME="$RUN/home" ROS_IP="$ip" ROS_MASTER_URI="$master" SARAS_ROS_IP="$ip" "$@"
 }
 
 cmd_ssh() {  # cmd_ssh ROLE CMD...: from the core namespace, through ROLE's sshd

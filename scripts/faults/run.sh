@@ -12,15 +12,19 @@ here="$(cd "$(dirname "$0")" && pwd)"
 OUT="$(realpath -m "${1:-$here/../../out/faults}")"
 # shellcheck disable=SC1091
 source "$here/../env.sh"
+# shellcheck disable=SC1091
+source "$here/../cluster/run_lib.sh"
 mkdir -p "$OUT"; rm -f "$OUT"/*.csv "$OUT"/platform*.bag* "$OUT"/faults.md "$OUT"/launch*.log
 export ROS_HOME="$OUT/ros_home" ROS_LOG_DIR="$OUT/ros_home/log"; mkdir -p "$ROS_LOG_DIR"
-port="$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+make_run_keys "$OUT/keys" || exit 2   # throw-away link keys of this run, deleted at exit
+port="$(free_port)"
 export ROS_MASTER_URI="http://127.0.0.1:$port" ROS_HOSTNAME=127.0.0.1
 rate="${CONTROL_RATE:-$([ "$(nproc)" -ge 4 ] && echo 1000 || echo 250)}"
 F="$here/faults.py"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null; done; sleep 2
             for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
+            rm -rf "$SARAS_KEY_DIR"
             [ -n "${tiny:-}" ] && { umount -l "$tiny" 2>/dev/null; rmdir "$tiny" 2>/dev/null; }; }
 trap cleanup EXIT
 now() { python3 -c 'import time; print("%.6f" % time.time())'; }

@@ -148,24 +148,27 @@ class StreamStats(object):
             self.stamp_gaps = sum(1 for dt in intervals if dt > limit)
 
 
-def check_bag(bag_path, config, topics=None):
+def check_bag(bag_path, config, topics=None, skews=None):
     """Measure every configured stream in ``bag_path``.
 
     Returns (results, problems): ``results`` is a list of dicts (one per configured stream plus any
     other recorded topic) and ``problems`` a list of human-readable failures for required streams
-    (missing, too slow, or with lost messages).
+    (missing, too slow, or with lost messages). With a dict ``skews``, it is filled with one
+    ``stamp_skew.SkewSamples`` per topic with header stamps (receive - stamp, publishers).
     """
     import rosbag  # noqa: delayed so that the pure functions above work without ROS
+    from saras_bringup.stamp_skew import SkewSamples
 
     wanted = {s.topic: s for s in config.streams}
     stats, intervals, last_t = {}, {}, {}
+    skews = {} if skews is None else skews
     with rosbag.Bag(bag_path) as bag:
         info = bag.get_type_and_topic_info().topics
         for topic, tinfo in info.items():
             stats[topic] = StreamStats(topic)
             stats[topic].msg_type = tinfo.msg_type
             intervals[topic] = []
-        for topic, raw, t in bag.read_messages(topics=topics, raw=True):
+        for topic, raw, t, conn in bag.read_messages(topics=topics, raw=True, return_connection_header=True):
             stream = wanted.get(topic)
             data = raw[1]
             header = None
@@ -176,6 +179,11 @@ def check_bag(bag_path, config, topics=None):
             st = stats[topic]
             tr = t.to_sec()
             ts = header[1] if header is not None and header[1] > 0 else tr
+            if header is not None and header[1] > 0:
+                sk = skews.setdefault(topic, SkewSamples())
+                sk.add(tr, ts)
+                caller = conn.get('callerid', b'?')
+                sk.publishers.add(caller.decode() if isinstance(caller, bytes) else caller)
             if topic in last_t:
                 intervals[topic].append(ts - last_t[topic])
             last_t[topic] = ts

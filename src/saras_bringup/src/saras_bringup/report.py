@@ -279,12 +279,14 @@ table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;paddin
 tr.bad{background:#fdd}tr.warn{background:#ffd}.missing{color:#a00}h2{margin-top:1.5em}"""
 
 
-def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=None, summary=''):
+def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=None, summary='',
+                 sections=()):
     """Write the plots and index.html into ``out_dir``; returns the index path.
 
     check: dict with 'results' and 'problems' (from bag_check --json); params: rosparam dump (dict);
     extras: list of (title, path relative to out_dir, caption): PNG captures are shown as images,
-    .txt files (e.g. a benchmark table) as preformatted text.
+    .txt files (e.g. a benchmark table) as preformatted text; sections: (title, HTML) blocks shown
+    first (e.g. one per machine of a cluster run).
     """
     import rosbag
     os.makedirs(out_dir, exist_ok=True)
@@ -346,7 +348,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     if problems:
         body.append('<h2>Problems</h2><ul>%s</ul>' % ''.join(
             '<li class="missing">%s</li>' % html.escape(p) for p in problems))
-    for title, content in rep.sections:
+    for title, content in list(sections) + rep.sections:
         body.append('<h2>%s</h2>%s' % (html.escape(title), content))
     if check:
         body.append('<h2>Recorded topics</h2>' + topic_table_html(check.get('results', [])))

@@ -1,0 +1,107 @@
+"""Energy at the teleoperation's power ports from a recording, independent of the tanks' self-report.
+
+Master port (per side): the wrench the tank lets through to the device (``/teleop/<s>/tank_wrench``)
+times the measured device twist (``/teleop/<s>/master_twist``): positive power is energy delivered
+to the operator. Slave port: the twist the tank lets through to the robot
+(``/teleop/<s>/tank_twist``) times the force of the tool on the tissue
+(``contact_force_sign * /mesa_<s>/contact_force``): positive power is energy delivered by the robot.
+Each product is integrated over the action's own stamps with the latest conjugate sample (zero-order
+hold), the way the tank pairs them.
+
+``energy_balance`` gives, over time, the energy delivered (integral of the positive power), the
+energy injected at the ports (integral of the negative power: the operator pushing the device,
+the tissue pushing the tool) and their difference, the net energy out of the teleoperator. Energy
+that entered = initial tank energy (first ``/teleop/tank_*/energy`` samples; 0 when the tanks are
+bypassed, as nothing is stored) + energy injected. Passivity holds when the net energy out never
+exceeds the initial tank energy: delivered <= entered at every instant.
+"""
+import bisect
+import math
+
+
+def dot6(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def port_power(actions, conjugates):
+    """[(t, power W, dt s)] for action samples [(t, 6-vector)] against conjugate samples
+    [(t, 6-vector)] (zero-order hold of the latest conjugate not newer than the action; actions
+    before the first conjugate have zero power). dt is the interval to the next action (the last
+    one gets the median interval)."""
+    if not actions:
+        return []
+    ct = [c[0] for c in conjugates]
+    out = []
+    for i, (t, a) in enumerate(actions):
+        k = bisect.bisect_right(ct, t) - 1
+        p = dot6(a, conjugates[k][1]) if k >= 0 else 0.0
+        out.append([t, p, 0.0])
+    dts = [actions[i + 1][0] - actions[i][0] for i in range(len(actions) - 1)]
+    for i, dt in enumerate(dts):
+        out[i][2] = max(0.0, dt)
+    if dts:
+        out[-1][2] = sorted(dts)[len(dts) // 2]
+    return [tuple(r) for r in out]
+
+
+def energy_balance(powers, e0):
+    """powers: list of [(t, P, dt)] (one per port); e0: initial stored energy [J].
+
+    Returns dict: t, delivered, injected, net (lists over the merged time axis) and the summary
+    delivered_J, injected_J, entered_J (= e0 + injected), net_max_J, passive (net <= e0 at every
+    instant, with 1 mJ + 0.5 % numerical tolerance), margin_J (e0 - net_max).
+    """
+    events = sorted((t, p * dt) for port in powers for (t, p, dt) in port)
+    ts, delivered, injected, net = [], [], [], []
+    d = i = 0.0
+    net_max = 0.0
+    for t, e in events:
+        if e > 0:
+            d += e
+        else:
+            i -= e
+        ts.append(t)
+        delivered.append(d)
+        injected.append(i)
+        net.append(d - i)
+        net_max = max(net_max, d - i)
+    tol = 1e-3 + 5e-3 * max(e0, d)
+    return {'t': ts, 'delivered': delivered, 'injected': injected, 'net': net,
+            'delivered_J': d, 'injected_J': i, 'entered_J': e0 + i, 'net_max_J': net_max,
+            'passive': net_max <= e0 + tol, 'margin_J': e0 - net_max}
+
+
+def tracking_error(master, slave, scale):
+    """RMS and max [m] of |scale * (master - master0) - (slave - slave0)| at the slave samples.
+
+    master, slave: [(t, (x, y, z))]; the master position is held (latest not newer)."""
+    if not master or not slave:
+        return float('nan'), float('nan')
+    mt = [m[0] for m in master]
+    m0, s0 = master[0][1], slave[0][1]
+    errs = []
+    for t, s in slave:
+        k = bisect.bisect_right(mt, t) - 1
+        if k < 0:
+            continue
+        m = master[k][1]
+        e = [scale * (m[j] - m0[j]) - (s[j] - s0[j]) for j in range(3)]
+        errs.append(math.sqrt(sum(v * v for v in e)))
+    if not errs:
+        return float('nan'), float('nan')
+    return math.sqrt(sum(e * e for e in errs) / len(errs)), max(errs)
+
+
+def time_to_hold(setpoints, t_cut, tolerance=1e-5, still_for=0.5):
+    """Seconds from t_cut until the set-point stays within ``tolerance`` [m] of one position for at
+    least ``still_for`` s and until the end (None when it never holds). setpoints: [(t, (x, y, z))]."""
+    after = [(t, p) for t, p in setpoints if t >= t_cut]
+    if len(after) < 2 or after[-1][0] - after[0][0] < still_for:
+        return None
+    last = after[-1][1]
+    k = len(after) - 1
+    while k > 0 and max(abs(a - b) for a, b in zip(after[k - 1][1], last)) <= tolerance:
+        k -= 1
+    if after[-1][0] - after[k][0] < still_for:
+        return None
+    return max(0.0, after[k][0] - t_cut)
