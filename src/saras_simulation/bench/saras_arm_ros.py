@@ -151,83 +151,75 @@ def main():
                 os.killpg(p.pid, signal.SIGKILL)
 
 
-def measure(args, procs):
-    import rospy
-    from geometry_msgs.msg import PoseStamped
-    from saras_msgs.msg import ComponentStatus
+class ArmWatch(object):
+    """The first ee_pose of each arm and the arm components' ComponentStatus (level changes,
+    rejected counters); the set-point publishers."""
 
-    rospy.init_node('saras_arm_bench', disable_signals=True)
-    start = {}
+    def __init__(self):
+        import rospy
+        from geometry_msgs.msg import PoseStamped
+        from saras_msgs.msg import ComponentStatus
+        self.OK, self.ERROR = ComponentStatus.OK, ComponentStatus.ERROR
+        self.start, self.status, self.pubs, self.subs = {}, {}, {}, []
+        for side in SIDES:
+            self.subs.append(rospy.Subscriber('/mesa_%s/ee_pose' % side, PoseStamped, self.on_pose, side,
+                                              queue_size=1))
+            self.pubs[side] = rospy.Publisher('/mesa_%s/target_pose' % side, PoseStamped, queue_size=1,
+                                              tcp_nodelay=True)
+        self.subs.append(rospy.Subscriber('/saras/status', ComponentStatus, self.on_status, queue_size=100))
 
-    def on_pose(side):
-        def cb(m):
-            start.setdefault(side, m.pose.position)
-        return cb
+    def on_pose(self, m, side):
+        self.start.setdefault(side, m.pose.position)
 
-    status = {}
-
-    def on_status(m):
+    def on_status(self, m):
         if not m.component.startswith('mesa_'):
             return
-        s = status.setdefault(m.component, {'ok': False, 'drops': 0, 'level': None, 'rejected': 0})
-        if m.level == ComponentStatus.OK:
+        s = self.status.setdefault(m.component, {'ok': False, 'drops': 0, 'level': None, 'rejected': 0})
+        if m.level == self.OK:
             s['ok'] = True
-        if s['ok'] and m.level == ComponentStatus.ERROR and s['level'] != ComponentStatus.ERROR:
+        if s['ok'] and m.level == self.ERROR and s['level'] != self.ERROR:
             s['drops'] += 1
         s['level'] = m.level
         s['rejected'] = m.rejected
 
-    subs = []
-    pubs = {}
+    def up(self):
+        return len(self.start) == 2 and all(
+            self.status.get('mesa_%s/saras_arms_driver' % s, {}).get('ok') for s in SIDES)
+
+
+def stream_targets(args, watch, stop):
+    """Set-points around each arm's start position at ``args.target_rate`` until ``stop`` is set."""
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    period = 1.0 / args.target_rate
+    msgs = {}
     for side in SIDES:
-        subs.append(rospy.Subscriber('/mesa_%s/ee_pose' % side, PoseStamped, on_pose(side),
-                                     queue_size=1))
-        pubs[side] = rospy.Publisher('/mesa_%s/target_pose' % side, PoseStamped, queue_size=1,
-                                     tcp_nodelay=True)
-    subs.append(rospy.Subscriber('/saras/status', ComponentStatus, on_status, queue_size=100))
-    end = time.monotonic() + 120.0
-    while time.monotonic() < end and not (len(start) == 2 and all(
-            status.get('mesa_%s/saras_arms_driver' % s, {}).get('ok') for s in SIDES)):
-        time.sleep(0.1)
-    if len(start) < 2:
-        print('the arm stack did not come up (no ee_pose)')
-        return 1
-    time.sleep(2.0)
-    stop = threading.Event()
-
-    def stream():
-        period = 1.0 / args.target_rate
-        msgs = {}
+        m = PoseStamped()
+        m.header.frame_id = 'mesa_%s/sbs_world' % side
+        msgs[side] = m
+    t0 = time.monotonic()
+    deadline = t0
+    while not stop.is_set():
+        t = time.monotonic() - t0
         for side in SIDES:
-            m = PoseStamped()
-            m.header.frame_id = 'mesa_%s/sbs_world' % side
-            msgs[side] = m
-        t0 = time.monotonic()
-        deadline = t0
-        while not stop.is_set():
-            t = time.monotonic() - t0
-            for side in SIDES:
-                m, p = msgs[side], start[side]
-                m.header.stamp = rospy.Time.now()
-                m.pose.position.x = p.x + 0.005 * math.sin(2 * math.pi * 0.25 * t)
-                m.pose.position.y = p.y + 0.005 * (1 - math.cos(2 * math.pi * 0.25 * t))
-                m.pose.position.z = p.z
-                pubs[side].publish(m)
-            deadline += period
-            d = deadline - time.monotonic()
-            if d > 0:
-                time.sleep(d)
-            elif d < -0.1:
-                deadline = time.monotonic()
+            m, p = msgs[side], watch.start[side]
+            m.header.stamp = rospy.Time.now()
+            m.pose.position.x = p.x + 0.005 * math.sin(2 * math.pi * 0.25 * t)
+            m.pose.position.y = p.y + 0.005 * (1 - math.cos(2 * math.pi * 0.25 * t))
+            m.pose.position.z = p.z
+            watch.pubs[side].publish(m)
+        deadline += period
+        d = deadline - time.monotonic()
+        if d > 0:
+            time.sleep(d)
+        elif d < -0.1:
+            deadline = time.monotonic()
 
-    streamer = threading.Thread(target=stream, daemon=True)
-    if not args.platform:           # on the platform the teleoperation commands the arms
-        streamer.start()
-    loaders = []
-    for _ in range(args.load):
-        p = subprocess.Popen([sys.executable, '-c', 'while True: pass'])
-        loaders.append(p)
-    # the streams are counted by a C++ subscriber (rosbag record, like the platform's recorder)
+
+def record(args, watch):
+    """Measures for ``args.duration`` s with the streams recorded by rosbag (a C++ subscriber, like
+    the platform's recorder): a dict of the window's results."""
+    import rospy
     bag = os.path.join(tempfile.mkdtemp(prefix='saras_arm_bench_bag_'), 'arm.bag')
     topics = ['/tf'] + ['/mesa_%s/%s' % (side, t) for side in SIDES
                         for t in ('ee_pose', 'joint_states', 'rcm_position')]
@@ -236,40 +228,39 @@ def measure(args, procs):
                                 start_new_session=True)
     time.sleep(3.0)
     pids = arm_processes()
-    rejected0 = {k: v['rejected'] for k, v in status.items()}
-    drops0 = {k: v['drops'] for k, v in status.items()}
+    r = {'rejected0': {k: v['rejected'] for k, v in watch.status.items()},
+         'drops0': {k: v['drops'] for k, v in watch.status.items()}}
     pids['(this benchmark: subscribers + set-point publisher)'] = os.getpid()
-    cpu0 = {k: cpu_seconds(p) for k, p in pids.items()}
-    load0 = os.getloadavg()[0]
+    r['cpu0'] = {k: cpu_seconds(p) for k, p in pids.items()}
+    r['load0'] = os.getloadavg()[0]
     t0 = time.monotonic()
-    w0 = rospy.Time.now()
+    r['w0'] = rospy.Time.now()
     time.sleep(args.duration)
-    w1 = rospy.Time.now()
-    dt = time.monotonic() - t0
-    cpu = {k: cpu_seconds(p) for k, p in pids.items()}
-    load1 = os.getloadavg()[0]
-    for p in loaders:
-        p.terminate()
-        p.wait()
-    stop.set()
-    if streamer.is_alive():
-        streamer.join(1.0)
+    r['w1'] = rospy.Time.now()
+    r['dt'] = time.monotonic() - t0
+    r['cpu'] = {k: cpu_seconds(p) for k, p in pids.items()}
+    r['load1'] = os.getloadavg()[0]
     os.killpg(recorder.pid, signal.SIGINT)
     recorder.wait(30)
-    stats = bag_stats(bag, w0, w1)
+    r['stats'] = bag_stats(bag, r['w0'], r['w1'])
+    return r
+
+
+def print_report(args, watch, r):
     with open('/proc/loadavg') as f:
         loadavg = f.read().strip()
+    dt, stats, cpu, cpu0 = r['dt'], r['stats'], r['cpu'], r['cpu0']
     print('SARAS arm ROS stack, both arms, %s, %.0f s, set-points at %.0f Hz, %d busy-loop processes, TF from %s; '
           'loadavg %.2f -> %.2f on %d CPUs (/proc/loadavg after: %s)'
           % ('inside the whole platform' if args.platform else 'alone', dt,
              args.control_rate if args.platform else args.target_rate, args.load,
              'saras_arms_state' if args.publish_tf else 'robot_state_publisher',
-             load0, load1, os.cpu_count(), loadavg))
+             r['load0'], r['load1'], os.cpu_count(), loadavg))
     print('| stream (recorded by rosbag) | messages | rate [Hz] | largest receive gap [ms] | largest stamp gap [ms] |')
     print('|---|---|---|---|---|')
     for k in sorted(stats):
         n, gap, sgap = stats[k]
-        print('| %s | %d | %.1f | %.1f | %.1f |' % (k, n, n / (w1 - w0).to_sec(), 1e3 * gap, 1e3 * sgap))
+        print('| %s | %d | %.1f | %.1f | %.1f |' % (k, n, n / (r['w1'] - r['w0']).to_sec(), 1e3 * gap, 1e3 * sgap))
     print('| process | CPU [% of one core] |')
     print('|---|---|')
     for k in sorted(cpu):
@@ -277,9 +268,37 @@ def measure(args, procs):
             print('| %s | %.1f |' % (k, 100.0 * (cpu[k] - cpu0[k]) / dt))
     print('| component | link drops | dropped/rejected inputs |')
     print('|---|---|---|')
-    for k in sorted(status):
-        print('| %s | %d | %d |' % (k, status[k]['drops'] - drops0.get(k, 0),
-                                      status[k]['rejected'] - rejected0.get(k, 0)))
+    for k in sorted(watch.status):
+        print('| %s | %d | %d |' % (k, watch.status[k]['drops'] - r['drops0'].get(k, 0),
+                                      watch.status[k]['rejected'] - r['rejected0'].get(k, 0)))
+
+
+def measure(args, procs):
+    import rospy
+    rospy.init_node('saras_arm_bench', disable_signals=True)
+    watch = ArmWatch()
+    end = time.monotonic() + 120.0
+    while time.monotonic() < end and not watch.up():
+        time.sleep(0.1)
+    if len(watch.start) < 2:
+        print('the arm stack did not come up (no ee_pose)')
+        return 1
+    time.sleep(2.0)
+    stop = threading.Event()
+    streamer = threading.Thread(target=stream_targets, args=(args, watch, stop), daemon=True)
+    if not args.platform:           # on the platform the teleoperation commands the arms
+        streamer.start()
+    loaders = [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(args.load)]
+    try:
+        r = record(args, watch)
+    finally:
+        for p in loaders:
+            p.terminate()
+            p.wait()
+        stop.set()
+        if streamer.is_alive():
+            streamer.join(1.0)
+    print_report(args, watch, r)
     rospy.signal_shutdown('done')
     return 0
 

@@ -46,6 +46,57 @@ def pct(v, q):
     return v[min(len(v) - 1, int(q * len(v)))]
 
 
+def round_trips(client, n, random_target, seen, cond):
+    """Rows (name, [ms]) of the command round trips and of the command -> state latency."""
+    rows = []
+    rtt = []
+    for _ in range(n):
+        t = time.perf_counter()
+        r = client.call(proto.EV_SET_TARGET, proto.make_set_target(client.next_id(), random_target()))
+        rtt.append(1e3 * (time.perf_counter() - t))
+        assert r['ok'], r
+    rows.append(('set_target ack round trip [ms]', rtt))
+    rtt = []
+    for _ in range(n):
+        t = time.perf_counter()
+        client.call(proto.EV_SET_MAX_VELOCITY, proto.make_set_max_velocity(client.next_id(), 2.0))
+        rtt.append(1e3 * (time.perf_counter() - t))
+    rows.append(('set_max_velocity ack round trip [ms]', rtt))
+    lat = []
+    for _ in range(min(n, 300)):
+        cid = client.next_id()
+        t = time.perf_counter()
+        client.emit(proto.EV_SET_TARGET, proto.make_set_target(cid, random_target()))
+        with cond:
+            cond.wait_for(lambda: cid in seen, 2.0)
+        if cid in seen:
+            lat.append(1e3 * (seen[cid] - t))
+    rows.append(('set_target -> first state with it [ms]', lat))
+    return rows
+
+
+def server_cpu(client, pid, states, random_target):
+    """CPU [% of one core] of the server streaming state, its state rate [Hz], then its CPU under a
+    1 kHz target stream and that stream's rate [Hz]."""
+    c0, t0, n0 = cpu_seconds(pid), time.monotonic(), len(states)
+    time.sleep(3.0)
+    idle_cpu = 100.0 * (cpu_seconds(pid) - c0) / (time.monotonic() - t0)
+    state_rate = (len(states) - n0) / (time.monotonic() - t0)
+    targets = [random_target() for _ in range(50)]
+    c0, t0 = cpu_seconds(pid), time.monotonic()
+    k = 0
+    deadline = time.monotonic()
+    while time.monotonic() - t0 < 3.0:
+        client.send_target(targets[k % 50])
+        k += 1
+        deadline += 0.001
+        d = deadline - time.monotonic()
+        if d > 0:
+            time.sleep(d)
+    busy_dt = time.monotonic() - t0
+    return idle_cpu, state_rate, 100.0 * (cpu_seconds(pid) - c0) / busy_dt, k / busy_dt
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--n', type=int, default=1000)
@@ -85,48 +136,8 @@ def main():
             q[:3] = model.lower[:3] + rng.uniform(0.3, 0.7, 3) * (model.upper[:3] - model.lower[:3])
             return model.tip_in_base(q)[:3, 3]
 
-        rows = []
-        rtt = []
-        for _ in range(args.n):
-            t = time.perf_counter()
-            r = client.call(proto.EV_SET_TARGET, proto.make_set_target(client.next_id(), random_target()))
-            rtt.append(1e3 * (time.perf_counter() - t))
-            assert r['ok'], r
-        rows.append(('set_target ack round trip [ms]', rtt))
-        rtt = []
-        for _ in range(args.n):
-            t = time.perf_counter()
-            client.call(proto.EV_SET_MAX_VELOCITY, proto.make_set_max_velocity(client.next_id(), 2.0))
-            rtt.append(1e3 * (time.perf_counter() - t))
-        rows.append(('set_max_velocity ack round trip [ms]', rtt))
-        lat = []
-        for _ in range(min(args.n, 300)):
-            cid = client.next_id()
-            t = time.perf_counter()
-            client.emit(proto.EV_SET_TARGET, proto.make_set_target(cid, random_target()))
-            with cond:
-                cond.wait_for(lambda: cid in seen, 2.0)
-            if cid in seen:
-                lat.append(1e3 * (seen[cid] - t))
-        rows.append(('set_target -> first state with it [ms]', lat))
-        # CPU of the server: idle streaming, then a 1 kHz target stream
-        c0, t0, n0 = cpu_seconds(child.pid), time.monotonic(), len(states)
-        time.sleep(3.0)
-        idle_cpu = 100.0 * (cpu_seconds(child.pid) - c0) / (time.monotonic() - t0)
-        state_rate = (len(states) - n0) / (time.monotonic() - t0)
-        targets = [random_target() for _ in range(50)]
-        c0, t0 = cpu_seconds(child.pid), time.monotonic()
-        k = 0
-        deadline = time.monotonic()
-        while time.monotonic() - t0 < 3.0:
-            client.send_target(targets[k % 50])
-            k += 1
-            deadline += 0.001
-            d = deadline - time.monotonic()
-            if d > 0:
-                time.sleep(d)
-        busy_dt = time.monotonic() - t0
-        busy_cpu = 100.0 * (cpu_seconds(child.pid) - c0) / busy_dt
+        rows = round_trips(client, args.n, random_target, seen, cond)
+        idle_cpu, state_rate, busy_cpu, busy_rate = server_cpu(client, child.pid, states, random_target)
     finally:
         client.stop()
         child.terminate()
@@ -139,7 +150,7 @@ def main():
         print('| %s | %.3f | %.3f | %.3f |' % (name, pct(v, 0.5), pct(v, 0.99), max(v)))
     print('| state stream rate [Hz] (nominal %.0f) | %.1f | | |' % (info['state_rate'], state_rate))
     print('| simulator CPU, streaming state [%% of one core] | %.1f | | |' % idle_cpu)
-    print('| simulator CPU, + %.0f Hz set_target [%% of one core] | %.1f | | |' % (k / busy_dt, busy_cpu))
+    print('| simulator CPU, + %.0f Hz set_target [%% of one core] | %.1f | | |' % (busy_rate, busy_cpu))
     return 0
 
 

@@ -55,87 +55,103 @@ def wait_for(cond, timeout, what):
         time.sleep(0.1)
 
 
-def main():
+def parse_args():
     ap = argparse.ArgumentParser()
     ap.add_argument('--duration', type=float, default=10.0)
     ap.add_argument('--rate', type=float, default=1000.0)
     ap.add_argument('--subscribers', choices=('control', 'pose'), default='control')
     ap.add_argument('--realtime-priority', type=int, default=10)
-    ap.add_argument('--receiver', default='rosrun saras_drivers touchball_receiver')
+    ap.add_argument('--receiver', default='rosrun nodelet nodelet standalone saras_drivers/TouchballReceiver '
+                    '__name:=touchball_receiver')
     ap.add_argument('--console', default='rosrun saras_simulation touchball_console_sim')
-    args = ap.parse_args()
-    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % MASTER_PORT)
-    os.environ.update(env)
-    procs = []
-    load0 = open('/proc/loadavg').read().split()[:3]
-    try:
-        procs.append(subprocess.Popen(['roscore', '-p', str(MASTER_PORT)], env=env,
-                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                      start_new_session=True))
-        time.sleep(3.0)
-        rx = subprocess.Popen(args.receiver.split() + [
-            '_port:=15501', '_command_port:=15502', '_joint_states_rate:=0.0',
-            '_realtime_priority:=%d' % args.realtime_priority], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-        procs.append(rx)
-        rospy.init_node('touchball_latency_bench', disable_signals=True)
-        lock = threading.Lock()
-        sender = {}              # receive stamp -> sender_time (left/state)
-        status = []              # (wall time, packets accepted so far) from touchball/status
-        poses = []               # (arrival wall time, receive stamp) (left/pose)
+    return ap.parse_args()
 
-        def on_state(m):
-            if not m.stale:
-                with lock:
-                    sender[(m.header.stamp.secs, m.header.stamp.nsecs)] = m.sender_time
 
-        def on_pose(m):
-            t = time.time()
-            with lock:
-                poses.append((t, (m.header.stamp.secs, m.header.stamp.nsecs)))
-        rospy.Subscriber('/touchball/left/state', HapticDeviceState, on_state, queue_size=10000,
+class Recorder(object):
+    """Subscribes to the receiver's topics: sender times of left/state by receive stamp, arrivals of
+    left/pose, the touchball/status packet counter."""
+
+    def __init__(self, subscribers):
+        self.lock = threading.Lock()
+        self.sender = {}              # receive stamp -> sender_time (left/state)
+        self.status = []              # (wall time, packets accepted so far) from touchball/status
+        self.poses = []               # (arrival wall time, receive stamp) (left/pose)
+        rospy.Subscriber('/touchball/left/state', HapticDeviceState, self.on_state, queue_size=10000,
                          tcp_nodelay=True)
         rospy.Subscriber('/touchball/status', ComponentStatus,
-                         lambda m: status.append((m.header.stamp.to_sec(), m.received)), queue_size=100)
-        rospy.Subscriber('/touchball/left/pose', PoseStamped, on_pose, queue_size=10000,
+                         lambda m: self.status.append((m.header.stamp.to_sec(), m.received)), queue_size=100)
+        rospy.Subscriber('/touchball/left/pose', PoseStamped, self.on_pose, queue_size=10000,
                          tcp_nodelay=True)
-        if args.subscribers == 'control':
+        if subscribers == 'control':
             for t in CONTROL:
                 rospy.Subscriber(t, rospy.AnyMsg, lambda _m: None, queue_size=10000, tcp_nodelay=True)
-        wait_for(lambda: status, 30.0, 'touchball/status from the receiver')
-        time.sleep(1.0)                                   # subscriber connections
-        sim = subprocess.Popen(args.console.split() + [
-            '_target_port:=15501', '_command_port:=15502', '_rate:=%f' % args.rate], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-        procs.append(sim)
-        wait_for(lambda: poses, 30.0, 'touchball/left/pose (console simulator streaming)')
-        time.sleep(2.0)                                   # warm-up
-        with lock:
-            n0 = len(poses)
-        c_rx, c_sim, t0, w0 = cpu_seconds(rx.pid), cpu_seconds(sim.pid), time.monotonic(), time.time()
-        time.sleep(args.duration)
-        c_rx, c_sim, dt = cpu_seconds(rx.pid) - c_rx, cpu_seconds(sim.pid) - c_sim, time.monotonic() - t0
-        w1 = time.time()
-        with lock:
-            n1 = len(poses)
-        time.sleep(1.0)                                   # let the state of the last poses arrive
-        with lock:
-            window = [(a, s, sender.get(s)) for a, s in poses[n0:n1]]
-    finally:
-        for p in reversed(procs):
-            try:
-                os.killpg(p.pid, signal.SIGINT)
-            except ProcessLookupError:
-                pass
-        for p in reversed(procs):
-            try:
-                p.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-    window = [(a, s[0] + 1e-9 * s[1], t) for a, s, t in window if t is not None]
+
+    def on_state(self, m):
+        if not m.stale:
+            with self.lock:
+                self.sender[(m.header.stamp.secs, m.header.stamp.nsecs)] = m.sender_time
+
+    def on_pose(self, m):
+        t = time.time()
+        with self.lock:
+            self.poses.append((t, (m.header.stamp.secs, m.header.stamp.nsecs)))
+
+    def count(self):
+        with self.lock:
+            return len(self.poses)
+
+    def window(self, n0, n1):
+        """(arrival, receive stamp [s], sender time) of the poses n0..n1 whose state arrived."""
+        with self.lock:
+            w = [(a, s, self.sender.get(s)) for a, s in self.poses[n0:n1]]
+        return [(a, s[0] + 1e-9 * s[1], t) for a, s, t in w if t is not None]
+
+
+def stop(procs):
+    for p in reversed(procs):
+        try:
+            os.killpg(p.pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+    for p in reversed(procs):
+        try:
+            p.wait(10)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+
+
+def measure(args, env, procs):
+    """Starts the receiver and the console simulator (appended to ``procs``) and measures for
+    ``args.duration`` s: (recorder, window, CPU seconds of receiver and simulator, dt, w0, w1)."""
+    rx = subprocess.Popen(args.receiver.split() + [
+        '_port:=15501', '_command_port:=15502', '_joint_states_rate:=0.0',
+        '_realtime_priority:=%d' % args.realtime_priority], env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    procs.append(rx)
+    rospy.init_node('touchball_latency_bench', disable_signals=True)
+    rec = Recorder(args.subscribers)
+    wait_for(lambda: rec.status, 30.0, 'touchball/status from the receiver')
+    time.sleep(1.0)                                   # subscriber connections
+    sim = subprocess.Popen(args.console.split() + [
+        '_target_port:=15501', '_command_port:=15502', '_rate:=%f' % args.rate], env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    procs.append(sim)
+    wait_for(lambda: rec.poses, 30.0, 'touchball/left/pose (console simulator streaming)')
+    time.sleep(2.0)                                   # warm-up
+    n0 = rec.count()
+    c_rx, c_sim, t0, w0 = cpu_seconds(rx.pid), cpu_seconds(sim.pid), time.monotonic(), time.time()
+    time.sleep(args.duration)
+    c_rx, c_sim, dt = cpu_seconds(rx.pid) - c_rx, cpu_seconds(sim.pid) - c_sim, time.monotonic() - t0
+    w1 = time.time()
+    n1 = rec.count()
+    time.sleep(1.0)                                   # let the state of the last poses arrive
+    return rec, rec.window(n0, n1), c_rx, c_sim, dt, w0, w1
+
+
+def report(args, rec, window, c_rx, c_sim, dt, w0, w1, load0):
     # packets the receiver accepted during the CPU window (status counter, 10 Hz, interpolated
     # to the window ends by the nearest samples)
-    inside = [(t, n) for t, n in status if w0 - 0.1 <= t <= w1 + 0.1]
+    inside = [(t, n) for t, n in rec.status if w0 - 0.1 <= t <= w1 + 0.1]
     accepted = (inside[-1][1] - inside[0][1]) * dt / (inside[-1][0] - inside[0][0]) if len(inside) > 2 else 0
     if len(window) < 10:
         print('too few samples (%d): is the workspace built?' % len(window))
@@ -161,6 +177,23 @@ def main():
     print('| packets accepted by the receiver [Hz] | %.1f | | |' % (accepted / dt))
     print('| touchball_console_sim CPU [%% of one core] | %.1f | | |' % (100.0 * c_sim / dt))
     return 0
+
+
+def main():
+    args = parse_args()
+    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % MASTER_PORT)
+    os.environ.update(env)
+    procs = []
+    load0 = open('/proc/loadavg').read().split()[:3]
+    try:
+        procs.append(subprocess.Popen(['roscore', '-p', str(MASTER_PORT)], env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                      start_new_session=True))
+        time.sleep(3.0)
+        results = measure(args, env, procs)
+    finally:
+        stop(procs)
+    return report(args, *results, load0=load0)
 
 
 if __name__ == '__main__':

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from saras_simulation import rigid
+from saras_common import transforms as tfm
 from saras_simulation.contact_model import ContactModel
 from saras_simulation.tissue_surface import TissueSurface
 
@@ -21,7 +21,7 @@ def test_flat_surface_depth_and_direction_in_base_frame():
     surf = TissueSurface(z0=0.07, waves=())
     m = ContactModel(surf)
     # mesa_left/sbs_world: yaw -90 deg about world z (world_frames.yaml) and, here, tilted 30 deg
-    R_world_base = rigid.rpy_to_matrix(0.5, 0.0, -np.pi / 2)
+    R_world_base = tfm.rpy_to_matrix((0.5, 0.0, -np.pi / 2))
     est = m.estimate([0.01, 0.02, 0.065], R_world_base.T)
     assert est.in_contact and est.depth == pytest.approx(0.005, abs=1e-12)
     np.testing.assert_allclose(R_world_base @ est.direction, [0, 0, 1], atol=1e-12)

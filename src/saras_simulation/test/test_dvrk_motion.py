@@ -7,7 +7,8 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from saras_simulation import dvrk_motion as dm
-from saras_simulation import rigid
+from saras_common import transforms as tfm
+from saras_description import frames as frames_yaml
 
 CONFIG = os.path.join(os.path.dirname(__file__), '..', 'config', 'dvrk_sim.yaml')
 FRAMES = os.path.join(os.path.dirname(__file__), '..', '..', 'saras_bringup', 'config',
@@ -20,10 +21,10 @@ def test_quaternion_round_trip_matches_scipy():
         q = rng.standard_normal(4)
         q /= np.linalg.norm(q)
         R_ref = Rotation.from_quat(q).as_matrix()
-        np.testing.assert_allclose(rigid.matrix_from_quaternion(q), R_ref, atol=1e-12)
-        q2 = rigid.quaternion_from_matrix(R_ref)
+        np.testing.assert_allclose(tfm.quaternion_to_matrix(q), R_ref, atol=1e-12)
+        q2 = tfm.quaternion_from_matrix(R_ref)
         assert min(np.linalg.norm(q2 - q), np.linalg.norm(q2 + q)) < 1e-9
-    R = rigid.rpy_to_matrix(0.1, -0.4, 2.0)
+    R = tfm.rpy_to_matrix((0.1, -0.4, 2.0))
     np.testing.assert_allclose(R, Rotation.from_euler('xyz', [0.1, -0.4, 2.0]).as_matrix(), atol=1e-12)
 
 
@@ -44,7 +45,7 @@ def test_psm_ik_position_inverts_fk_with_a_straight_wrist():
 def test_ecm_camera_frames_from_the_hand_eye():
     kin = dm.load_kinematics()
     # right eye +x of the left one in the optical frame (ROS stereo convention), 1-20 mm
-    b = (rigid.invert(kin.camera_in_tip('left')) @ kin.camera_in_tip('right'))[:3, 3]
+    b = (tfm.inverse(kin.camera_in_tip('left')) @ kin.camera_in_tip('right'))[:3, 3]
     assert 0.001 <= b[0] <= 0.02 and abs(b[1]) < 1e-6 and abs(b[2]) < 1e-6
 
 
@@ -87,7 +88,7 @@ def test_shipped_config_puts_tips_in_contract_workspace():
         cfg = yaml.safe_load(f)
     kin = dm.load_kinematics()
     core = dm.DvrkSimCore.from_config(cfg, kinematics=kin)
-    frames = rigid.load_frames_file(FRAMES)
+    frames = frames_yaml.frames_by_child(frames_yaml.load_frames(FRAMES, root=None))
     for t in np.arange(0.0, 60.0, 0.37):
         s = core.sample(t)
         assert set(s) == {'PSM1', 'PSM2', 'ECM'}

@@ -85,6 +85,49 @@ def plot_trajectories(data, side, scale, t0):
     return fig
 
 
+PEDAL_TOPICS = {'clutch': '/dvrk/footpedals/clutch', 'camera': '/dvrk/footpedals/camera',
+                'coag': '/dvrk/footpedals/coag', 'head sensor': '/dvrk/footpedals/operatorpresent'}
+
+
+def pedal_intervals(series, t_end):
+    """[(t_press, t_release)] from sensor_msgs/Joy events (buttons[0] 1 = pressed)."""
+    out, start = [], None
+    for t, m in series:
+        pressed = bool(m.buttons and m.buttons[0])
+        if pressed and start is None:
+            start = t
+        elif not pressed and start is not None:
+            out.append((start, t))
+            start = None
+    if start is not None:
+        out.append((start, t_end))
+    return out
+
+
+def plot_console(data, t0, scale=0.2):
+    """da Vinci console: MTMR (scaled) vs PSM1 displacement with the foot-pedal events as spans."""
+    tm, pm = _positions(data.get('/dvrk/MTMR/position_cartesian_current', []))
+    ts, ps = _positions(data.get('/dvrk/PSM1/position_cartesian_current', []))
+    if len(tm) == 0 or len(ts) == 0:
+        return None
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    colours = {'clutch': 'tab:red', 'camera': 'tab:blue', 'coag': 'tab:orange', 'head sensor': 'tab:green'}
+    t_end = max(tm[-1], ts[-1])
+    for k, ax in enumerate(axes):
+        ax.plot(tm - t0, 1e3 * scale * (pm[:, k] - pm[0, k]), label='MTMR x %.2f' % scale, lw=1)
+        ax.plot(ts - t0, 1e3 * (ps[:, k] - ps[0, k]), label='PSM1', lw=1)
+        for name, topic in PEDAL_TOPICS.items():
+            for i, (a, b) in enumerate(pedal_intervals(data.get(topic, []), t_end)):
+                ax.axvspan(a - t0, b - t0, color=colours[name], alpha=0.08 if name == 'head sensor' else 0.25,
+                           label=name + ' pressed' if (k == 0 and i == 0) else None)
+        ax.set_ylabel('%s [mm]' % 'xyz'[k])
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc='upper right', fontsize=8)
+    axes[0].set_title('da Vinci console: MTMR (scaled) vs PSM1, displacement from start in each base')
+    axes[-1].set_xlabel('time [s]')
+    return fig
+
+
 def plot_distances(data, thresholds, t0):
     series = data.get('/collision/distances', [])
     if not series:
@@ -233,6 +276,8 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     topics = ['/teleop/%s/master_pose' % s for s in SIDES] + ['/mesa_%s/ee_pose' % s for s in SIDES]
     topics += ['/mesa_%s/target_pose' % s for s in SIDES] + ['/mesa_%s/contact_force' % s for s in SIDES]
     topics += ['/collision/distances', '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
+    topics += ['/dvrk/MTMR/position_cartesian_current', '/dvrk/PSM1/position_cartesian_current']
+    topics += list(PEDAL_TOPICS.values())
     with rosbag.Bag(bag_path) as bag:
         t0 = bag.get_start_time()
         data = read_series(bag, topics)
@@ -242,6 +287,10 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
                    lambda: plot_trajectories(data, side, scale, t0),
                    '/teleop/%s/master_pose (scaled by %.2f), /mesa_%s/target_pose, /mesa_%s/ee_pose'
                    % (side, scale, side, side))
+    rep.figure('console_trajectory.png', 'da Vinci console: MTM vs PSM trajectory and foot pedals',
+               lambda: plot_console(data, t0),
+               '/dvrk/MTMR and /dvrk/PSM1 position_cartesian_current; shaded: /dvrk/footpedals/* pressed '
+               '(clutch: PSM holds while the hand re-centres)')
     rep.figure('distances.png', 'Tool distances', lambda: plot_distances(data, thresholds, t0),
                '/collision/distances with the collision (red) and warning (orange) thresholds')
     occ = colour_occupancy(data.get('/collision/distances', []), thresholds)

@@ -12,7 +12,7 @@ Supported joint types: ``revolute``, ``continuous``, ``prismatic`` (one axis) an
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from saras_description.transforms import axis_angle, matrix_to_quat, rpy_to_matrix, trans
+from saras_common.transforms import axis_angle, quaternion_from_matrix, rpy_to_matrix, translation
 
 MOVING = ('revolute', 'continuous', 'prismatic')
 
@@ -30,7 +30,7 @@ class Joint(object):
         """parent -> child [4x4] at joint position q [rad or m]."""
         if self.type == 'fixed':
             return self.origin
-        m = trans(*(self.axis * q)) if self.type == 'prismatic' else axis_angle(self.axis, q)
+        m = translation(*(self.axis * q)) if self.type == 'prismatic' else axis_angle(self.axis, q)
         return self.origin.dot(m)
 
 
@@ -96,13 +96,13 @@ class UrdfTf(object):
             c = self._cache[k]
             if c is None or c[0] != v:
                 t = j.transform(v)
-                c = (v, (j.parent, j.child, t[:3, 3], matrix_to_quat(t[:3, :3])))
+                c = (v, (j.parent, j.child, t[:3, 3], quaternion_from_matrix(t)))
                 self._cache[k] = c
             out.append(c[1])
         return out
 
     def fixed(self):
-        return [(j.parent, j.child, j.origin[:3, 3], matrix_to_quat(j.origin[:3, :3]))
+        return [(j.parent, j.child, j.origin[:3, 3], quaternion_from_matrix(j.origin))
                 for j in self.joints if j.type == 'fixed']
 
     def chain(self, q, root, tip):

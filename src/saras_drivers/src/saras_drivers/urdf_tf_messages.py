@@ -9,23 +9,8 @@ place per joint sample (no per-sample message allocation). Units: m, quaternion 
 ``publish_frequency`` (default 50 Hz there): the joint states keep their full rate, /tf carries the
 samples on a ``1 / rate`` grid.
 """
-from geometry_msgs.msg import TransformStamped
+from saras_common.transforms import set_transform_msg, transform_stamped
 from tf2_msgs.msg import TFMessage
-
-
-def transform_stamped(parent, child, xyz, quat, stamp):
-    """One TransformStamped parent -> child."""
-    t = TransformStamped()
-    t.header.frame_id, t.child_frame_id, t.header.stamp = parent, child, stamp
-    fill(t, xyz, quat)
-    return t
-
-
-def fill(t, xyz, quat):
-    """Writes translation ``xyz`` and rotation ``quat`` into TransformStamped ``t`` in place."""
-    tr, ro = t.transform.translation, t.transform.rotation
-    tr.x, tr.y, tr.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
-    ro.x, ro.y, ro.z, ro.w = float(quat[0]), float(quat[1]), float(quat[2]), float(quat[3])
 
 
 class RateLimiter(object):
@@ -66,15 +51,15 @@ class UrdfTfMessages(object):
         self.urdf_tf = urdf_tf
         self.msg = TFMessage()
         for parent, child, xyz, quat in urdf_tf.moving(q0):
-            self.msg.transforms.append(transform_stamped(parent, child, xyz, quat, stamp))
+            self.msg.transforms.append(transform_stamped(parent, child, stamp=stamp, xyz=xyz, q=quat))
 
     def static(self, stamp):
         """Fixed joints, for /tf_static (latched, published once)."""
-        return [transform_stamped(p, c, xyz, quat, stamp) for p, c, xyz, quat in self.urdf_tf.fixed()]
+        return [transform_stamped(p, c, stamp=stamp, xyz=xyz, q=quat) for p, c, xyz, quat in self.urdf_tf.fixed()]
 
     def moving(self, q, stamp):
         """The preallocated TFMessage refilled for joint vector ``q``, every transform stamped ``stamp``."""
         for t, (_, _, xyz, quat) in zip(self.msg.transforms, self.urdf_tf.moving(q)):
             t.header.stamp = stamp
-            fill(t, xyz, quat)
+            set_transform_msg(t.transform, xyz, quat)
         return self.msg

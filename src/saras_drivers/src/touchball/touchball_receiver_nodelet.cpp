@@ -64,7 +64,7 @@
 #include <sensor_msgs/Joy.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "saras_drivers/nodelet_namespace.h"
+#include "saras_common/nodelet_namespace.h"
 #include "saras_drivers/touchball_kinematics.h"
 #include "saras_drivers/touchball_receiver_core.h"
 #include "saras_drivers/touchball_receiver_params.h"
@@ -485,7 +485,7 @@ private:
     try
     {
       // topics in the nodelet's own namespace (/touchball/...), not /teleop/ of the manager
-      receiver_.reset(new TouchballReceiver(getNodeHandle(), getPrivateNodeHandle(), nodeletNamespace(getName()),
+      receiver_.reset(new TouchballReceiver(getNodeHandle(), getPrivateNodeHandle(), saras_common::nodeletNamespace(getName()),
                                             getName()));
     }
     catch (const std::exception& e)

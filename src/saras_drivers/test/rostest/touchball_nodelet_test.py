@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """rostest: the receiver nodelet loaded into /teleop/teleop_manager publishes under the contract's
-names (/touchball/<side>/..., /tf, /touchball/status), streams the simulator's packets and is OK
-on touchball/status and on /diagnostics (under the nodelet's name, hardware_id console_link)."""
+names (/touchball/<side>/..., /tf, /touchball/status), streams the packets of a fake console
+(250 Hz, from this test node) and is OK on touchball/status and on /diagnostics (under the
+nodelet's name, hardware_id console_link)."""
 import sys
+import threading
 import time
 import unittest
 
@@ -12,7 +14,9 @@ from geometry_msgs.msg import PoseStamped
 from saras_msgs.msg import ComponentStatus, HapticDeviceState
 from tf2_msgs.msg import TFMessage
 
-from touchball_fake_console import LinkDiagnostics
+from touchball_fake_console import FakeConsole, LinkDiagnostics
+
+RATE = 250.0  # [Hz] console stream
 
 
 class TestNodelet(unittest.TestCase):
@@ -23,6 +27,22 @@ class TestNodelet(unittest.TestCase):
         rospy.Subscriber('/tf', TFMessage, tfs.append, queue_size=1000)
         rospy.Subscriber('/touchball/status', ComponentStatus, status.append, queue_size=100)
         diag = LinkDiagnostics()
+        console = FakeConsole(rospy.get_param('~port'), rospy.get_param('~command_port'))
+        stop = threading.Event()
+
+        def stream():
+            k = 0
+            while not stop.wait(1.0 / RATE):
+                console.send(k / RATE)
+                k += 1
+        streamer = threading.Thread(target=stream, daemon=True)
+        streamer.start()
+
+        def finish():
+            stop.set()
+            streamer.join(1.0)
+            console.close()
+        self.addCleanup(finish)
         end = time.monotonic() + 40.0
         while time.monotonic() < end and (len(states) < 100 or not status or status[-1].level != 0):
             time.sleep(0.1)

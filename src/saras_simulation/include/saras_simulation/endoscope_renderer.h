@@ -1,7 +1,7 @@
 /**
  * @file endoscope_renderer.h
  * @brief Ray-casting renderer of the simulated surgical scene for one raw (distorted) camera
- *        (ROS-agnostic C++ port of endoscope_renderer.py's SceneRenderer).
+ *        (no ROS runtime; the camera is an image_geometry::PinholeCameraModel).
  *
  * Per camera pose, a static layer is rendered and cached: tissue height field (solved on a
  * coarse grid of precomputed undistorted pixel rays, colour on a finer grid, upsampled),
@@ -23,7 +23,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-#include "saras_simulation/endoscope_camera.h"
+#include "saras_simulation/endoscope_camera_info.h"
 #include "saras_simulation/endoscope_scene.h"
 
 namespace saras_simulation
@@ -67,7 +67,8 @@ class SceneRenderer
 {
 public:
   /// @throws std::invalid_argument on inconsistent options
-  SceneRenderer(const CameraModel& camera, const TissueSurface& surface,
+  /// @param camera the raw (distorted) camera, of a validated camera_info (cameraModel())
+  SceneRenderer(const image_geometry::PinholeCameraModel& camera, const TissueSurface& surface,
                 const RendererOptions& options = RendererOptions());
 
   /// Replace the bone boxes (8 vertices each in the vertices-file order, world frame [m]);
@@ -97,7 +98,9 @@ public:
   void resetStats() { stats_ = RenderStats(); }
   /// Times the static layer was rendered (cache misses).
   int backgroundRenders() const { return background_renders_; }
-  const CameraModel& camera() const { return cam_; }
+  const image_geometry::PinholeCameraModel& camera() const { return cam_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
   int colourStep() const { return colour_step_; }
   /// Tissue optical depth z [m] of the last static layer on the tissue grid (CV_32F, inf = no
   /// tissue): cell (i, j) is the ray of raw pixel ((i + 0.5) tissueStep() - 0.5, (j + 0.5) tissueStep() - 0.5).
@@ -116,6 +119,12 @@ private:
   };
   bool boxSilhouette(const Eigen::Isometry3d& T_cam_world, const std::array<Eigen::Vector3d, 8>& corners,
                      Silhouette& sil);
+  /// The clipped outline clip_a_ (normalised coordinates) through the lens: convex hull [px] of
+  /// its edges sampled every <= 16 px; false if a sample does not project.
+  bool outlineThroughLens(std::vector<cv::Point2f>& hull);
+  BoxCam boxInCamera(const Box& b, const Eigen::Isometry3d& T_cam_world) const;
+  /// Ray/box test of row v, pixels [u0, u1), into bg_ / depth_ (z-tested).
+  void castBoxRow(const BoxCam& bc, int v, int u0, int u1);
   void renderBackground(const Eigen::Isometry3d& T_world_cam);
   void solveTissue(const Eigen::Matrix3f& R, const Eigen::Vector3f& o);
   float tissueDepthAt(int u, int v) const;
@@ -126,7 +135,8 @@ private:
   void drawShaft(cv::Mat& img, const std::vector<Eigen::Vector3d>& pc, const std::vector<bool>& above,
                  double radius) const;
 
-  CameraModel cam_;
+  image_geometry::PinholeCameraModel cam_;
+  int width_, height_;  ///< [px]
   TissueSurface surface_;
   RendererOptions opt_;
   Eigen::Vector2d fov_;
@@ -160,6 +170,8 @@ private:
   std::vector<float> row_gx_, row_gy_;                   ///< height gradient of the last Newton step
   std::vector<cv::Point2f> hull_pts_;                    ///< box silhouette scratch
   std::vector<cv::Point2d> poly_, clip_a_, clip_b_;      ///< box outline (normalised coordinates) scratch
+  std::vector<cv::Point3d> lens_in_;                     ///< points to project through the lens (scratch)
+  std::vector<cv::Point2d> lens_out_;                    ///< and their pixels
   std::vector<Silhouette> box_sil_;                      ///< per box, for the current pose
   double ray_lo_[2], ray_hi_[2];                         ///< range of the pixel rays' x/z, y/z (+ margin)
   std::vector<int> col_i0_, row_j0_;                     ///< tissue-grid taps of each pixel column / row

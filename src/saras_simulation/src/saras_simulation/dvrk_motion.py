@@ -12,14 +12,14 @@ Contents
   viewpoint.
 * :class:`ReplaySchedule`: time-ordered replay of recorded samples (bag replay) with loop support.
 
-Units: metres, radians, seconds. Transforms are 4x4 numpy arrays (see :mod:`saras_simulation.rigid`).
+Units: metres, radians, seconds. Transforms are 4x4 numpy arrays (see :mod:`saras_common.transforms`).
 """
 import bisect
 import math
 
 import numpy as np
 
-from saras_simulation import rigid
+from saras_common import transforms as tfm
 
 #: Joint names published on /dvrk/PSM*/state_joint_current (dVRK 1.x).
 PSM_JOINT_NAMES = ('outer_yaw', 'outer_pitch', 'outer_insertion', 'outer_roll',
@@ -42,7 +42,7 @@ def shaft_rotation(yaw, pitch):
     about -y, ``pitch`` about -x (as saras_description.kinematics.pivot_tip): the shaft direction
     is ``(sin(yaw) cos(pitch), -sin(pitch), -cos(yaw) cos(pitch))``.
     """
-    return rigid.rot_y(-yaw) @ rigid.rot_x(-pitch) @ rigid.rot_x(math.pi)
+    return (tfm.rot_y(-yaw) @ tfm.rot_x(-pitch) @ tfm.rot_x(math.pi))[:3, :3]
 
 
 def shaft_direction(yaw, pitch):

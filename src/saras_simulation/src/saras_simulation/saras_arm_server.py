@@ -99,123 +99,125 @@ class SarasArmServer(object):
     # ------------------------------------------------------------------ handlers
     def _register(self):
         sio = self.sio
+        sio.on('connect', self._on_connect)
+        sio.on('disconnect', self._on_disconnect)
+        for event, fn in (('set_target', self._set_target), ('set_max_velocity', self._set_max_velocity),
+                          ('set_clip', self._set_clip), ('hold', self._hold)):
+            sio.on(event, self._commanding(event, fn))
+        sio.on(proto.EV_SUBSCRIBE_STATE, self._on_subscribe_state)
+        sio.on(proto.EV_STATE_ACK, self._on_state_ack)
 
-        @sio.event
-        async def connect(sid, environ):
-            self.clients += 1
-            self.sids.add(sid)
-            self.log.info('client %s connected', sid)
+    async def _on_connect(self, sid, environ):
+        self.clients += 1
+        self.sids.add(sid)
+        self.log.info('client %s connected', sid)
 
-        @sio.event
-        async def disconnect(sid):
-            self.clients -= 1
-            self.sids.discard(sid)
-            self.subscribers.discard(sid)
-            self._flow.pop(sid, None)
-            if sid == self.commander:
-                now = await self._sample_until()
-                self.advance(now)
-                self.model.hold()
-                self.commander = None
-                self.log.warning('commanding client %s disconnected: holding', sid)
-
-        async def run(sid, event, payload, fn):
-            cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
-            cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
-            # first the state samples a late loop still owes (so they are not overtaken by the
-            # command), then the command acts now: no await between advance() and fn()
-            if fn is set_target and stale(payload):
-                # a set-point that waited in our input longer than the limit is not executed (a
-                # simulator starved of CPU would otherwise replay seconds-old motion), and costs
-                # almost nothing, so that a backlog drains; counted, no error event: the client
-                # cannot act on it and it would add load
-                self.stale_targets += 1
-                return proto.reply(False, proto.STALE, 'target older than %.3f s' % self.max_target_age, cmd_id)
+    async def _on_disconnect(self, sid):
+        self.clients -= 1
+        self.sids.discard(sid)
+        self.subscribers.discard(sid)
+        self._flow.pop(sid, None)
+        if sid == self.commander:
             now = await self._sample_until()
-            try:
-                self.advance(now)           # (a no-op if the loop already sampled past now)
-                extra = fn(payload)
-            except proto.ProtocolError as e:
-                self.rejected += 1
-                await self.sio.emit(proto.EV_ERROR, {'id': cmd_id, 'event': event, 'code': e.code,
-                                                     'message': e.message}, to=sid)
-                return proto.reply(False, e.code, e.message, cmd_id)
-            except Exception as e:  # never let a payload kill the server
-                self.rejected += 1
-                self.log.error('%s handler failed: %s', event, e)
-                return proto.reply(False, proto.BAD_PAYLOAD, str(e), cmd_id)
-            self.accepted += 1
-            self.events[event] = self.events.get(event, 0) + 1
-            r = proto.reply(True, proto.OK, '', cmd_id)
-            if extra:
-                r.update(extra)
-            return r
-
-        def set_target(payload):
-            cmd_id, pos, q = proto.parse_set_target(payload)
-            self.model.set_target(pos, q, cmd_id)
-
-        def stale(payload):
-            """True for a set_target older than max_target_age (sender time vs our wall clock)."""
-            if self.max_target_age <= 0.0:
-                return False
-            try:
-                t = proto.target_time(payload)
-            except proto.ProtocolError:
-                return False                 # parse_set_target reports it
-            return t is not None and time.time() - t > self.max_target_age
-
-        def set_max_velocity(payload):
-            _, v = proto.parse_set_max_velocity(payload)
-            self.model.set_max_velocity(v)
-
-        def set_clip(payload):
-            _, jaw, roll = proto.parse_set_clip(payload)
-            self.model.set_clip(jaw, roll)
-
-        def hold(payload):
-            proto.parse_hold(payload)
+            self.advance(now)
             self.model.hold()
+            self.commander = None
+            self.log.warning('commanding client %s disconnected: holding', sid)
 
-        def commanding(fn):
-            async def handler(sid, payload=None):
-                r = await run(sid, fn.__name__, payload, fn)
-                if r['ok']:
-                    self.commander = sid
-                return r
-            return handler
-
-        for fn in (set_target, set_max_velocity, set_clip, hold):
-            sio.on(fn.__name__, commanding(fn))
-
-        @sio.on(proto.EV_SUBSCRIBE_STATE)
-        async def subscribe_state(sid, payload=None):
-            try:
-                window = proto.parse_subscribe_state(payload)
-            except proto.ProtocolError as e:
-                self.rejected += 1
-                return proto.reply(False, e.code, e.message)
-            self.sio.enter_room(sid, proto.STATE_ROOM)
-            self.subscribers.add(sid)
-            if window > 0:
-                self._flow[sid] = [window, 0, 0]
-            else:
-                self._flow.pop(sid, None)
-            r = proto.reply(True)
-            r['info'] = self.info()
+    def _commanding(self, event, fn):
+        """Handler of command ``event``: runs ``fn(payload)``; a client whose command succeeds
+        becomes the commander."""
+        async def handler(sid, payload=None):
+            r = await self._run(sid, event, payload, fn)
+            if r['ok']:
+                self.commander = sid
             return r
+        return handler
 
-        @sio.on(proto.EV_STATE_ACK)
-        async def state_ack(sid, payload=None):
-            # no answer (sent ~30 times/s); a malformed one is counted and ignored
-            try:
-                received = proto.parse_state_ack(payload)
-            except proto.ProtocolError:
-                self.rejected += 1
-                return
-            flow = self._flow.get(sid)
-            if flow is not None:
-                flow[2] = max(flow[2], received)
+    async def _run(self, sid, event, payload, fn):
+        cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
+        cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
+        # first the state samples a late loop still owes (so they are not overtaken by the
+        # command), then the command acts now: no await between advance() and fn()
+        if event == 'set_target' and self._stale(payload):
+            # a set-point that waited in our input longer than the limit is not executed (a
+            # simulator starved of CPU would otherwise replay seconds-old motion), and costs
+            # almost nothing, so that a backlog drains; counted, no error event: the client
+            # cannot act on it and it would add load
+            self.stale_targets += 1
+            return proto.reply(False, proto.STALE, 'target older than %.3f s' % self.max_target_age, cmd_id)
+        now = await self._sample_until()
+        try:
+            self.advance(now)           # (a no-op if the loop already sampled past now)
+            extra = fn(payload)
+        except proto.ProtocolError as e:
+            self.rejected += 1
+            await self.sio.emit(proto.EV_ERROR, {'id': cmd_id, 'event': event, 'code': e.code,
+                                                 'message': e.message}, to=sid)
+            return proto.reply(False, e.code, e.message, cmd_id)
+        except Exception as e:  # never let a payload kill the server
+            self.rejected += 1
+            self.log.error('%s handler failed: %s', event, e)
+            return proto.reply(False, proto.BAD_PAYLOAD, str(e), cmd_id)
+        self.accepted += 1
+        self.events[event] = self.events.get(event, 0) + 1
+        r = proto.reply(True, proto.OK, '', cmd_id)
+        if extra:
+            r.update(extra)
+        return r
+
+    def _stale(self, payload):
+        """True for a set_target older than max_target_age (sender time vs our wall clock)."""
+        if self.max_target_age <= 0.0:
+            return False
+        try:
+            t = proto.target_time(payload)
+        except proto.ProtocolError:
+            return False                 # parse_set_target reports it
+        return t is not None and time.time() - t > self.max_target_age
+
+    def _set_target(self, payload):
+        cmd_id, pos, q = proto.parse_set_target(payload)
+        self.model.set_target(pos, q, cmd_id)
+
+    def _set_max_velocity(self, payload):
+        _, v = proto.parse_set_max_velocity(payload)
+        self.model.set_max_velocity(v)
+
+    def _set_clip(self, payload):
+        _, jaw, roll = proto.parse_set_clip(payload)
+        self.model.set_clip(jaw, roll)
+
+    def _hold(self, payload):
+        proto.parse_hold(payload)
+        self.model.hold()
+
+    async def _on_subscribe_state(self, sid, payload=None):
+        try:
+            window = proto.parse_subscribe_state(payload)
+        except proto.ProtocolError as e:
+            self.rejected += 1
+            return proto.reply(False, e.code, e.message)
+        self.sio.enter_room(sid, proto.STATE_ROOM)
+        self.subscribers.add(sid)
+        if window > 0:
+            self._flow[sid] = [window, 0, 0]
+        else:
+            self._flow.pop(sid, None)
+        r = proto.reply(True)
+        r['info'] = self.info()
+        return r
+
+    async def _on_state_ack(self, sid, payload=None):
+        # no answer (sent ~30 times/s); a malformed one is counted and ignored
+        try:
+            received = proto.parse_state_ack(payload)
+        except proto.ProtocolError:
+            self.rejected += 1
+            return
+        flow = self._flow.get(sid)
+        if flow is not None:
+            flow[2] = max(flow[2], received)
 
     def info(self):
         m = self.model

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """rostest: dvrk_sim messages follow the contract: frame ids, joint names, dVRK convention (tip at
 negative z, 10-18 cm below the RCM for PSMs), cartesian pose = FK(joint state) of the same stamp,
-CRTK aliases identical to the 1.x topics, status OK on /diagnostics."""
+CRTK topics at the root identical to the 1.x topics, the master console's MTMs (7 dVRK 1.x joint
+names) and head-sensor event, status OK on /diagnostics."""
 import sys
 import unittest
 
@@ -9,9 +10,10 @@ import numpy as np
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import JointState, Joy
 
-from saras_simulation import dvrk_motion, rigid
+from saras_common import transforms as tfm
+from saras_simulation import dvrk_kinematics, dvrk_motion
 
 import diag_status
 
@@ -25,8 +27,13 @@ class ContractTest(unittest.TestCase):
                              lambda m, a=arm: cp[a].__setitem__(m.header.stamp.to_nsec(), m))
             rospy.Subscriber('/dvrk/%s/state_joint_current' % arm, JointState,
                              lambda m, a=arm: js[a].__setitem__(m.header.stamp.to_nsec(), m))
-            rospy.Subscriber('/dvrk/%s/measured_cp' % arm, PoseStamped,
+            rospy.Subscriber('/%s/measured_cp' % arm, PoseStamped,
                              lambda m, a=arm: crtk[a].__setitem__(m.header.stamp.to_nsec(), m))
+        mtm, head = {}, []
+        for arm in ('MTML', 'MTMR'):
+            rospy.Subscriber('/dvrk/%s/state_joint_current' % arm, JointState,
+                             lambda m, a=arm: mtm.__setitem__(a, m))
+        rospy.Subscriber('/dvrk/footpedals/operatorpresent', Joy, head.append)
         diag_status.subscribe(status)
         rospy.sleep(3.0)
         kin = dvrk_motion.load_kinematics()
@@ -42,7 +49,7 @@ class ContractTest(unittest.TestCase):
                 pos = [p.pose.position.x, p.pose.position.y, p.pose.position.z]
                 np.testing.assert_allclose(pos, T[:3, 3], atol=1e-9)
                 q = p.pose.orientation
-                np.testing.assert_allclose(rigid.matrix_from_quaternion([q.x, q.y, q.z, q.w]),
+                np.testing.assert_allclose(tfm.quaternion_to_matrix([q.x, q.y, q.z, q.w]),
                                            T[:3, :3], atol=1e-9)
                 self.assertLess(pos[2], 0.0)
                 if arm != 'ECM':
@@ -50,6 +57,9 @@ class ContractTest(unittest.TestCase):
                 if k in crtk[arm]:
                     self.assertEqual(crtk[arm][k].pose, p.pose)
             self.assertGreater(len(set(crtk[arm]) & common), 100)
+        for arm in ('MTML', 'MTMR'):
+            self.assertEqual(tuple(mtm[arm].name), dvrk_kinematics.MTM_JOINT_NAMES)
+        self.assertEqual(list(head[-1].buttons), [1])
         mine = [s for s in status if s.component.endswith('dvrk_sim')]
         self.assertTrue(mine and mine[-1].level == diag_status.OK)
 

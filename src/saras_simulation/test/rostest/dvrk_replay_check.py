@@ -12,7 +12,8 @@ import rostest
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import JointState
 
-from saras_simulation import dvrk_motion, rigid
+from saras_common import transforms as tfm
+from saras_simulation import dvrk_motion
 
 
 def pose_tuple(p):
@@ -71,7 +72,7 @@ class ReplayTest(unittest.TestCase):
             qs = got['ECM_js'].get(nsec)   # joint states with exactly this header stamp
             if not qs:
                 continue
-            R = rigid.matrix_from_quaternion(pose[3:])
+            R = tfm.quaternion_to_matrix(pose[3:])
             errors = []
             for q in qs:
                 T = kin.ecm_tip_in_base(q)

@@ -19,17 +19,17 @@ def cases():
         f.write('2\n0 0 0\n')
     info = ['_camera_info_dir:=%s' % CONFIG]
     return [
-        (['_fps:=0'], '~fps'),
-        (['_fps:=500'] + info, '~fps'),
+        (['_fps:=0'], '/fps = 0 [Hz] is invalid'),
+        (['_fps:=500'] + info, '/fps = 500'),
         (['_camera_info_dir:=/nonexistent'], 'camera_info'),
-        (info + ['_width:=8'], '~width'),
-        (info + ['_jpeg_quality:=101'], '~jpeg_quality'),
-        (info + ['_bones_file:=%s' % bad_vertices], '~bones_file'),
+        (info + ['_width:=8'], '/width = 8'),
+        (info + ['_jpeg_quality:=101'], '/jpeg_quality = 101'),
+        (info + ['_bones_file:=%s' % bad_vertices], '/bones_file'),
         (info + ['_bones_file:=%s' % bad_vertices], 'unexpected end of file in box 0'),
-        (info + ['_tools:=[{tip: PSM1/tool_tip}]'], '~tools'),
-        (info + ['_tissue:={z0: .nan}'], 'tissue'),
-        (info + ['_texture_extent:=-1'], '~texture_extent'),
-        (info + ['_recorded_queue:=0'], '~recorded_queue'),
+        (info + ['_tools:=[{tip: PSM1/tool_tip}]'], '/tools'),
+        (info + ['_tissue:={z0: .nan}'], '/tissue'),
+        (info + ['_texture_extent:=-1'], '/texture_extent = -1'),
+        (info + ['_recorded_queue:=0'], '/recorded_queue = 0'),
     ]
 
 

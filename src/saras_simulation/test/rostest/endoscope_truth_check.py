@@ -15,12 +15,12 @@ import tf2_ros
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import String
 
-from saras_simulation import rigid
+from saras_common import transforms as tfm
 
 
 def tf_matrix(ts):
     t, q = ts.transform.translation, ts.transform.rotation
-    return rigid.transform_from_pose([t.x, t.y, t.z], [q.x, q.y, q.z, q.w])
+    return tfm.transform_from_quaternion([t.x, t.y, t.z], [q.x, q.y, q.z, q.w])
 
 
 class TruthTest(unittest.TestCase):
@@ -29,7 +29,7 @@ class TruthTest(unittest.TestCase):
         tf2_ros.TransformListener(buf)
         spec = rospy.get_param('/endoscope/endoscope_sim/targets/checkerboard')
         cols, rows, sq = int(spec['cols']), int(spec['rows']), float(spec['square'])
-        T_wb = rigid.make_transform(rigid.rpy_to_matrix(*spec['rpy']), spec['xyz'])
+        T_wb = tfm.transform_from_rpy(spec['xyz'], spec['rpy'])
         obj = np.array([(i * sq, j * sq, 0.0) for j in range(rows) for i in range(cols)])
         obj_w = obj @ T_wb[:3, :3].T + T_wb[:3, 3]
         infos = {}
@@ -64,7 +64,7 @@ class TruthTest(unittest.TestCase):
                                            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 50, 1e-4))
                 T_wc = tf_matrix(buf.lookup_transform('world', info.header.frame_id,
                                                       img_msg.header.stamp, rospy.Duration(2.0)))
-                T_cw = rigid.invert(T_wc)
+                T_cw = tfm.inverse(T_wc)
                 pc = obj_w @ T_cw[:3, :3].T + T_cw[:3, 3]
                 uv, _ = cv2.projectPoints(pc.reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
                                           np.reshape(info.K, (3, 3)), np.asarray(info.D))

@@ -1,15 +1,15 @@
 /**
  * @file nodelet_namespace.h
- * @brief Namespace for the topics of a saras_drivers nodelet, shared by its nodelets.
+ * @brief Namespace for the topics of a nodelet: those of the standalone node, whatever the manager.
  */
-#ifndef SARAS_DRIVERS_NODELET_NAMESPACE_H
-#define SARAS_DRIVERS_NODELET_NAMESPACE_H
+#ifndef SARAS_COMMON_NODELET_NAMESPACE_H
+#define SARAS_COMMON_NODELET_NAMESPACE_H
 
 #include <string>
 
 #include <ros/names.h>
 
-namespace saras_drivers
+namespace saras_common
 {
 /**
  * Absolute namespace of the nodelet named @p nodelet_name, with a trailing '/' (e.g. "/endoscope/"
@@ -26,6 +26,6 @@ inline std::string nodeletNamespace(const std::string& nodelet_name)
   return ns;
 }
 
-}  // namespace saras_drivers
+}  // namespace saras_common
 
-#endif  // SARAS_DRIVERS_NODELET_NAMESPACE_H
+#endif  // SARAS_COMMON_NODELET_NAMESPACE_H

@@ -1,0 +1,206 @@
+"""Serial-chain kinematics of the simulated da Vinci arms (PSM, ECM, MTM), ROS-agnostic.
+
+* :class:`Chain`: a serial chain of fixed transforms and 1-DOF joints (rotation about or translation
+  along x, y or z, with a sign and an offset), its forward kinematics, its geometric Jacobian and a
+  damped-least-squares inverse kinematics (:meth:`Chain.ik`). One forward pass gives the pose and
+  the Jacobian, so the CRTK ``servo_cp``/``move_cp`` and the teleoperation cost one pass per
+  iteration.
+* :func:`psm_chain`, :func:`ecm_chain`: the PSM and ECM of ``saras_description.kinematics`` (the URDF
+  model robot_state_publisher uses) written as chains; the tests check both against it.
+* :func:`mtm_chain`: a stand-in master tool manipulator with the dVRK 1.x MTM joint names (outer yaw,
+  shoulder and elbow pitch, a four-joint gimbal). Its link lengths are those of the da Vinci MTM
+  (upper arm 0.279 m, forearm 0.365 m); the gimbal is idealised (intersecting axes).
+
+Units: metres, radians. Poses are 4x4 numpy arrays in the arm's base frame.
+"""
+import math
+
+import numpy as np
+
+_AXES = {'x': 0, 'y': 1, 'z': 2}
+
+#: dVRK 1.x MTM joint names (state_joint_current / measured_js of MTML, MTMR).
+MTM_JOINT_NAMES = ('outer_yaw', 'shoulder_pitch', 'elbow_pitch', 'wrist_platform', 'wrist_pitch',
+                   'wrist_yaw', 'wrist_roll')
+MTM_UPPER_ARM = 0.2794      # [m] shoulder pitch to elbow pitch (da Vinci MTM)
+MTM_FOREARM = 0.3645        # [m] elbow pitch to the gimbal centre (da Vinci MTM)
+
+
+def _rot(axis, a):
+    c, s = math.cos(a), math.sin(a)
+    i = _AXES[axis]
+    j, k = (i + 1) % 3, (i + 2) % 3
+    R = np.eye(4)
+    R[j, j], R[j, k], R[k, j], R[k, k] = c, -s, s, c
+    return R
+
+
+def _trans(axis, d):
+    T = np.eye(4)
+    T[_AXES[axis], 3] = d
+    return T
+
+
+def fixed_rot(axis, a):
+    """Chain element: a fixed rotation of ``a`` [rad] about ``axis``."""
+    return ('fixed', _rot(axis, a))
+
+
+def fixed_trans(axis, d):
+    """Chain element: a fixed translation of ``d`` [m] along ``axis``."""
+    return ('fixed', _trans(axis, d))
+
+
+def revolute(axis, sign=1.0, offset=0.0):
+    """Chain element: rotation of ``sign * q + offset`` about ``axis``."""
+    return ('r', axis, float(sign), float(offset))
+
+
+def prismatic(axis, sign=1.0, offset=0.0):
+    """Chain element: translation of ``sign * q + offset`` along ``axis``."""
+    return ('p', axis, float(sign), float(offset))
+
+
+def pose_error(T, goal, orientation_weight=1.0):
+    """6-vector (position [m], weighted rotation vector [rad]) from ``T`` to ``goal`` (base frame)."""
+    dp = goal[:3, 3] - T[:3, 3]
+    Rerr = goal[:3, :3] @ T[:3, :3].T
+    c = max(-1.0, min(1.0, (np.trace(Rerr) - 1.0) / 2.0))
+    angle = math.acos(c)
+    v = np.array([Rerr[2, 1] - Rerr[1, 2], Rerr[0, 2] - Rerr[2, 0], Rerr[1, 0] - Rerr[0, 1]])
+    if angle < 1e-9:
+        w = 0.5 * v
+    elif math.pi - angle < 1e-6:
+        # half-turn: axis from the symmetric part
+        k = int(np.argmax(np.diag(Rerr)))
+        axis = (Rerr[:, k] + np.eye(3)[k]) / math.sqrt(2.0 * (1.0 + Rerr[k, k]))
+        w = angle * axis
+    else:
+        w = angle / (2.0 * math.sin(angle)) * v
+    return np.concatenate([dp, orientation_weight * w])
+
+
+class Chain(object):
+    """Serial chain: ``elements`` from :func:`fixed_rot`, :func:`fixed_trans`, :func:`revolute`,
+    :func:`prismatic`, base to tip; ``limits`` optional ``[(lower, upper)]`` per joint (IK clamps)."""
+
+    def __init__(self, elements, limits=None, orientation_weight=1.0):
+        self.elements = list(elements)
+        self.n = sum(1 for e in self.elements if e[0] != 'fixed')
+        self.limits = None if limits is None else np.asarray(limits, dtype=float)
+        if self.limits is not None and self.limits.shape != (self.n, 2):
+            raise ValueError('Chain: limits must be %d (lower, upper) pairs' % self.n)
+        self.orientation_weight = float(orientation_weight)
+
+    def fk(self, q, jacobian=False):
+        """Tip pose (4x4); with ``jacobian`` also the 6 x n geometric Jacobian (linear; angular),
+        in the base frame (the dVRK's spatial Jacobian convention)."""
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self.n,):
+            raise ValueError('Chain.fk: %d joint values expected, got %s' % (self.n, q.shape))
+        T = np.eye(4)
+        joints = []
+        i = 0
+        for e in self.elements:
+            if e[0] == 'fixed':
+                T = T @ e[1]
+                continue
+            kind, axis, sign, offset = e
+            v = sign * q[i] + offset
+            a = _AXES[axis]
+            if jacobian:
+                joints.append((kind, T[:3, a] * sign, T[:3, 3].copy()))
+            if kind == 'r':      # T @ rotation about axis a: mixes the two other columns
+                j, k = (a + 1) % 3, (a + 2) % 3
+                c, s = math.cos(v), math.sin(v)
+                cj, ck = T[:3, j].copy(), T[:3, k]
+                T[:3, j] = c * cj + s * ck
+                T[:3, k] = c * ck - s * cj
+            else:                # T @ translation along axis a
+                T[:3, 3] += v * T[:3, a]
+            i += 1
+        if not jacobian:
+            return T
+        J = np.zeros((6, self.n))
+        for k, (kind, a, p) in enumerate(joints):
+            if kind == 'r':
+                J[:3, k] = np.cross(a, T[:3, 3] - p)
+                J[3:, k] = a
+            else:
+                J[:3, k] = a
+        return T, J
+
+    def clamp(self, q):
+        if self.limits is None:
+            return q
+        return np.minimum(np.maximum(q, self.limits[:, 0]), self.limits[:, 1])
+
+    def ik(self, goal, q0, tol=1e-6, max_iter=30, damping=1e-4):
+        """Joint values reaching ``goal`` (4x4) from the reference ``q0`` (damped least squares,
+        within the limits). Returns ``(q, residual)``; residual = norm of the remaining weighted
+        pose error (m / rad)."""
+        q = self.clamp(np.array(q0, dtype=float))
+        W = np.array([1.0, 1.0, 1.0] + [self.orientation_weight] * 3)
+        err = None
+        for _ in range(max_iter):
+            T, J = self.fk(q, jacobian=True)
+            err = pose_error(T, goal, self.orientation_weight)
+            if np.linalg.norm(err) < tol:
+                break
+            Jw = J * W[:, None]
+            dq = Jw.T @ np.linalg.solve(Jw @ Jw.T + damping * np.eye(6), err)
+            q = self.clamp(q + dq)
+        else:
+            err = pose_error(self.fk(q), goal, self.orientation_weight)
+        return q, float(np.linalg.norm(err))
+
+
+    def track(self, goal, q, damping=1e-4):
+        """One damped-least-squares step from ``q`` towards ``goal``: the per-tick update of a
+        smoothly moving goal (second-order error), at the cost of one forward pass."""
+        q = np.asarray(q, dtype=float)
+        T, J = self.fk(q, jacobian=True)
+        err = pose_error(T, goal, self.orientation_weight)
+        W = np.array([1.0, 1.0, 1.0] + [self.orientation_weight] * 3)
+        Jw = J * W[:, None]
+        return self.clamp(q + Jw.T @ np.linalg.solve(Jw @ Jw.T + damping * np.eye(6), err))
+
+
+def psm_chain(limits=None):
+    """PSM tool tip in the PSM base (RCM) frame, joints ``outer_yaw .. outer_wrist_yaw`` (= the URDF's
+    ``saras_description.kinematics.psm_tip_in_base``)."""
+    from saras_description.geometry import PsmGeometry as g
+    return Chain([revolute('y', -1.0), revolute('x', -1.0), fixed_rot('x', math.pi),
+                  prismatic('z', 1.0, -(g.WRIST_PITCH_TO_YAW + g.WRIST_YAW_TO_TIP)),
+                  revolute('z'), revolute('x'), fixed_trans('z', g.WRIST_PITCH_TO_YAW),
+                  revolute('y'), fixed_trans('z', g.WRIST_YAW_TO_TIP)], limits)
+
+
+def ecm_chain(limits=None):
+    """ECM camera tip in the ECM base (RCM) frame, 4 joints (= ``kinematics.ecm_tip_in_base``).
+    Four joints cannot hold a 6-D goal: the IK reaches the position and keeps what it can of the
+    orientation (orientation weight 0.001, i.e. 1 rad counts as 1 mm)."""
+    return Chain([revolute('y', -1.0), revolute('x', -1.0), fixed_rot('x', math.pi),
+                  prismatic('z'), revolute('z')], limits, orientation_weight=0.001)
+
+
+def mtm_chain():
+    """Stand-in MTM: handle frame in the MTM base frame (z up, y towards the surgeon). At zero joints
+    the upper arm points along +y, the forearm down and the handle's z axis down (the
+    instrument direction it commands)."""
+    return Chain([revolute('z'), revolute('x'), fixed_trans('y', MTM_UPPER_ARM),
+                  revolute('x'), fixed_trans('z', -MTM_FOREARM),
+                  revolute('z'), revolute('x'), revolute('y'), fixed_rot('x', math.pi),
+                  revolute('z')])
+
+
+def limits_of(table, names):
+    """``[(lower, upper)]`` in ``names`` order from a saras_description LIMITS table."""
+    return [(table[n].lower, table[n].upper) for n in names]
+
+
+def twist(T_prev, T, dt):
+    """Cartesian velocity (linear m/s, angular rad/s; base frame) from two poses ``dt`` [s] apart."""
+    if not dt > 0:
+        return np.zeros(6)
+    return pose_error(T_prev, T) / dt
