@@ -16,7 +16,7 @@ from netns_helpers import WS
 
 PREFIX, BASE = 'sarasmk', '10.77.8'
 CLUSTER_SH = WS / 'scripts' / 'cluster.sh'
-EXPECTED = {'core_pc': ['/recorder', '/clock_monitor', '/world_frames', '/diagnostic_aggregator'],
+EXPECTED = {'core_pc': ['/audio/microphone', '/clock_monitor', '/world_frames', '/diagnostic_aggregator'],
             'teleop_pc': ['/teleop/teleop_manager', '/touchball_receiver', '/mesa_left/saras_arms_driver',
                           '/colliding_regions'],
             'dvrk_pc': ['/dvrk/dvrk_sim', '/endoscope/endoscope_sim', '/visual_feedback'],
