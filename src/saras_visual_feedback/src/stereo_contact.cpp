@@ -1,11 +1,9 @@
 #include "saras_visual_feedback/stereo_contact.h"
-
 #include "saras_visual_feedback/disparity_surface.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -14,8 +12,8 @@ namespace saras_visual_feedback
 namespace
 {
 constexpr int kMaxDisparities = 256;
-constexpr int kSectors = 16;
-constexpr int kMaskSegments = 8;  ///< pieces of a projected shaft capsule  ///< angular sectors around the tip checked for surface coverage
+constexpr int kSectors = 16;      ///< angular sectors around the tip checked for surface coverage
+constexpr int kMaskSegments = 8;  ///< pieces of a projected shaft capsule
 
 /// Remaps the rectified region [x0, x0 + w) x [y0, y0 + h) of @p src into @p dst (zeros outside the image).
 void remapRegion(const cv::Mat& src, const cv::Mat map[2], int x0, int y0, int w, int h, cv::Mat* dst)

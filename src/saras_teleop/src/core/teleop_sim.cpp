@@ -29,129 +29,192 @@ struct TankMsg
 };
 }  // namespace
 
-SimResult runSimulation(const SimParams& p)
+namespace
 {
-  SimResult r;
-  TwistEstimator est(p.twist_cutoff, 0.1);
-  TransparencyChannel tr(p.transparency);
-  EnergyTank tm(p.master_tank, 1), ts(p.slave_tank, 1);
-  VelocityIntegrator vi(p.integrator);
-  DelayChannel<MasterMsg> fwd(p.forward);
-  DelayChannel<Vector6d> bwd(p.backward);
-  ChannelParams fe = p.forward, be = p.backward;
-  fe.seed += 101;
-  be.seed += 202;
-  DelayChannel<TankMsg> m2s(fe), s2m(be);
+/// One simulated teleoperation loop: the state of runSimulation() and its per-step stages, called
+/// in the order of the real chain (master site, transparency, tanks, slave, operator).
+class LoopSim
+{
+public:
+  explicit LoopSim(const SimParams& p)
+    : p_(p)
+    , est_(p.twist_cutoff, 0.1)
+    , tr_(p.transparency)
+    , tm_(p.master_tank, 1)
+    , ts_(p.slave_tank, 1)
+    , vi_(p.integrator)
+    , fwd_(p.forward)
+    , bwd_(p.backward)
+    , m2s_(shifted(p.forward, 101))
+    , s2m_(shifted(p.backward, 202))
+  {
+    r_.E0 = p.master_tank.bypass ? 0.0 : p.master_tank.T_init + p.slave_tank.T_init;
+    vi_.start(KDL::Frame(KDL::Vector(0, 0, 0)));
+    double f_wall = 0.0;
+    U0_ = springEnergy(sp_, s_, f_wall);
+  }
 
-  r.E0 = p.master_tank.bypass ? 0.0 : p.master_tank.T_init + p.slave_tank.T_init;
-  const double dt = p.dt;
-  const int steps = static_cast<int>(std::lround(p.duration / dt));
-  const double kr = p.robot_stiffness, ke = p.env_stiffness;
+  SimResult run()
+  {
+    const double dt = p_.dt;
+    const int steps = static_cast<int>(std::lround(p_.duration / dt));
+    for (int k = 0; k < steps; ++k)
+    {
+      const double t = k * dt;
+      const Vector6d vhat = masterSite(t);
+      Vector6d des_v;
+      transparency(t, des_v);
+      tanks(t, vhat, des_v);
+      const double U = slave();
+      operatorAndRecord(k, t, U);
+    }
+    r_.E_out_final = r_.E_dev + r_.E_slave;
+    r_.tracking_rms = steps > 0 ? std::sqrt(sq_ / steps) : 0.0;
+    return r_;
+  }
 
-  Eigen::Vector3d xm = Eigen::Vector3d::Zero(), vm = Eigen::Vector3d::Zero();
-  const Eigen::Vector3d xm0 = xm;
-  vi.start(KDL::Frame(KDL::Vector(0, 0, 0)));
-  Eigen::Vector3d sp = Eigen::Vector3d::Zero(), s = sp;
-  const Eigen::Vector3d sp0 = sp;
-  Vector6d f_dev = Vector6d::Zero();
-  Vector6d des_w_master = Vector6d::Zero();
-  Vector6d contact_sample = Vector6d::Zero();  // force of the wall on the tool (sampled)
-  EnergyInbox inbox_m, inbox_s;
-  double next_force_sample = 0.0;
-  double U0 = 0.0, sq = 0.0;
+private:
+  static ChannelParams shifted(ChannelParams c, unsigned seed_offset)
+  {
+    c.seed += seed_offset;
+    return c;
+  }
 
-  auto springEnergy = [&](const Eigen::Vector3d& spx, Eigen::Vector3d& s_out, double& f_wall) {
+  /// Spring energy of the robot (kr) and the wall (ke) for set-point @p spx; @p s_out is where the
+  /// tool settles, @p f_wall the wall's force on it (-x).
+  double springEnergy(const Eigen::Vector3d& spx, Eigen::Vector3d& s_out, double& f_wall) const
+  {
+    const double kr = p_.robot_stiffness, ke = p_.env_stiffness;
     s_out = spx;
     f_wall = 0.0;
-    if (spx.x() > p.wall)
+    if (spx.x() > p_.wall)
     {
-      s_out.x() = (kr * spx.x() + ke * p.wall) / (kr + ke);
-      f_wall = -ke * (s_out.x() - p.wall);  // on the tool, pushing back (-x)
+      s_out.x() = (kr * spx.x() + ke * p_.wall) / (kr + ke);
+      f_wall = -ke * (s_out.x() - p_.wall);
     }
-    const double pen = std::max(0.0, s_out.x() - p.wall);
+    const double pen = std::max(0.0, s_out.x() - p_.wall);
     return 0.5 * kr * (spx - s_out).squaredNorm() + 0.5 * ke * pen * pen;
-  };
-  double f_wall = 0.0;
-  U0 = springEnergy(sp, s, f_wall);
+  }
 
-  for (int k = 0; k < steps; ++k)
+  /// tf_transformer core: the master's twist estimate, sent over the forward channel.
+  Vector6d masterSite(double t)
   {
-    const double t = k * dt;
-    // --- master site: tf_transformer core
-    est.addSample(t, KDL::Frame(KDL::Vector(xm.x(), xm.y(), xm.z())));
-    const Vector6d vhat = est.twist();
-    fwd.push(MasterMsg{ xm, vhat }, t);
-    // --- slave site: transparency with what has arrived
-    fwd.deliver(t, [&](const MasterMsg& m) {
-      tr.setMasterPosition(m.pos);
-      tr.setMasterTwist(m.twist);
+    est_.addSample(t, KDL::Frame(KDL::Vector(xm_.x(), xm_.y(), xm_.z())));
+    const Vector6d vhat = est_.twist();
+    fwd_.push(MasterMsg{ xm_, vhat }, t);
+    return vhat;
+  }
+
+  /// Slave site: transparency with what has arrived; its wrench goes back to the master.
+  void transparency(double t, Vector6d& des_v)
+  {
+    fwd_.deliver(t, [&](const MasterMsg& m) {
+      tr_.setMasterPosition(m.pos);
+      tr_.setMasterTwist(m.twist);
     });
-    tr.setSlavePosition(s);
-    tr.setContactForce(contact_sample.head<3>());  // reflected on the master (contact_feedback)
-    Vector6d des_w, des_v;
-    tr.update(des_w, des_v);
-    bwd.push(des_w, t);
-    bwd.deliver(t, [&](const Vector6d& w) { des_w_master = w; });
-    // --- tanks (energy packets consumed once)
-    m2s.deliver(t, [&](const TankMsg& m) {
-      inbox_s.energy += m.energy;
-      inbox_s.ereq = m.ereq;
+    tr_.setSlavePosition(s_);
+    tr_.setContactForce(contact_sample_.head<3>());  // reflected on the master (contact_feedback)
+    Vector6d des_w;
+    tr_.update(des_w, des_v);
+    bwd_.push(des_w, t);
+    bwd_.deliver(t, [&](const Vector6d& w) { des_w_master_ = w; });
+  }
+
+  /// Both tanks; energy packets are consumed once.
+  void tanks(double t, const Vector6d& vhat, const Vector6d& des_v)
+  {
+    const double dt = p_.dt;
+    m2s_.deliver(t, [&](const TankMsg& m) {
+      inbox_s_.energy += m.energy;
+      inbox_s_.ereq = m.ereq;
     });
-    s2m.deliver(t, [&](const TankMsg& m) {
-      inbox_m.energy += m.energy;
-      inbox_m.ereq = m.ereq;
+    s2m_.deliver(t, [&](const TankMsg& m) {
+      inbox_m_.energy += m.energy;
+      inbox_m_.ereq = m.ereq;
     });
-    tm.setDesired(0, des_w_master);
-    tm.setConjugate(0, vhat);
-    tm.step(dt, inbox_m.energy / dt, inbox_m.ereq);
-    inbox_m.energy = 0.0;
-    if (t >= next_force_sample)
+    tm_.setDesired(0, des_w_master_);
+    tm_.setConjugate(0, vhat);
+    tm_.step(dt, inbox_m_.energy / dt, inbox_m_.ereq);
+    inbox_m_.energy = 0.0;
+    if (t >= next_force_sample_)
     {
       double fw;
       Eigen::Vector3d stmp;
-      springEnergy(sp, stmp, fw);
-      contact_sample.setZero();
-      contact_sample[0] = fw;
-      next_force_sample += 1.0 / p.force_rate;
+      springEnergy(sp_, stmp, fw);
+      contact_sample_.setZero();
+      contact_sample_[0] = fw;
+      next_force_sample_ += 1.0 / p_.force_rate;
     }
-    ts.setDesired(0, des_v);
-    ts.setConjugate(0, p.contact_force_sign * contact_sample);
-    ts.step(dt, inbox_s.energy / dt, inbox_s.ereq);
-    inbox_s.energy = 0.0;
-    m2s.push(TankMsg{ tm.pout() * dt, tm.ereq() }, t);
-    s2m.push(TankMsg{ ts.pout() * dt, ts.ereq() }, t);
-    f_dev = tm.output(0);
-    // --- slave: integrate and settle against the wall
-    vi.step(ts.output(0), dt, false);
-    const KDL::Frame& F = vi.pose();
-    sp = Eigen::Vector3d(F.p.x(), F.p.y(), F.p.z());
-    const double U = springEnergy(sp, s, f_wall);
-    // --- operator + master device (semi-implicit Euler, force held over the step)
-    const double xh = p.hand_amplitude * std::sin(2.0 * M_PI * p.hand_frequency * t);
-    const double vh = p.hand_amplitude * 2.0 * M_PI * p.hand_frequency * std::cos(2.0 * M_PI * p.hand_frequency * t);
-    Eigen::Vector3d f_hand = -p.hand_stiffness * xm - p.hand_damping * vm;
-    f_hand.x() += p.hand_stiffness * xh + p.hand_damping * vh;
-    const Eigen::Vector3d fd = f_dev.head<3>();
-    vm += dt * (f_hand + fd) / p.master_mass;
-    const Eigen::Vector3d dx = dt * vm;
-    xm += dx;
-    r.E_dev += fd.dot(dx);
-    r.E_slave = U - U0;
-    const double E_out = r.E_dev + r.E_slave;
-    r.E_out_max = std::max(r.E_out_max, E_out);
-    r.T_master_min = std::min(r.T_master_min, tm.energy());
-    r.T_slave_min = std::min(r.T_slave_min, ts.energy());
-    r.master_excursion = std::max(r.master_excursion, (xm - xm0).norm());
-    r.slave_excursion = std::max(r.slave_excursion, (s - sp0).norm());
-    r.max_force = std::max(r.max_force, fd.norm());
-    const Eigen::Vector3d e = (sp - sp0) - p.transparency.scale_factor * (xm - xm0);
-    sq += e.squaredNorm();
-    if (p.trace_every > 0 && k % p.trace_every == 0)
-      r.trace.push_back(SimSample{ t, xm.x(), s.x(), sp.x(), tm.energy(), ts.energy(), E_out, fd.x() });
+    ts_.setDesired(0, des_v);
+    ts_.setConjugate(0, p_.contact_force_sign * contact_sample_);
+    ts_.step(dt, inbox_s_.energy / dt, inbox_s_.ereq);
+    inbox_s_.energy = 0.0;
+    m2s_.push(TankMsg{ tm_.pout() * dt, tm_.ereq() }, t);
+    s2m_.push(TankMsg{ ts_.pout() * dt, ts_.ereq() }, t);
+    f_dev_ = tm_.output(0);
   }
-  r.E_out_final = r.E_dev + r.E_slave;
-  r.tracking_rms = steps > 0 ? std::sqrt(sq / steps) : 0.0;
-  return r;
+
+  /// Slave: integrate the set-point and settle against the wall; returns the spring energy [J].
+  double slave()
+  {
+    vi_.step(ts_.output(0), p_.dt, false);
+    const KDL::Frame& F = vi_.pose();
+    sp_ = Eigen::Vector3d(F.p.x(), F.p.y(), F.p.z());
+    double f_wall = 0.0;
+    return springEnergy(sp_, s_, f_wall);
+  }
+
+  /// Operator + master device (semi-implicit Euler, force held over the step), then the figures.
+  void operatorAndRecord(int k, double t, double U)
+  {
+    const double dt = p_.dt;
+    const double xh = p_.hand_amplitude * std::sin(2.0 * M_PI * p_.hand_frequency * t);
+    const double vh = p_.hand_amplitude * 2.0 * M_PI * p_.hand_frequency * std::cos(2.0 * M_PI * p_.hand_frequency * t);
+    Eigen::Vector3d f_hand = -p_.hand_stiffness * xm_ - p_.hand_damping * vm_;
+    f_hand.x() += p_.hand_stiffness * xh + p_.hand_damping * vh;
+    const Eigen::Vector3d fd = f_dev_.head<3>();
+    vm_ += dt * (f_hand + fd) / p_.master_mass;
+    const Eigen::Vector3d dx = dt * vm_;
+    xm_ += dx;
+    r_.E_dev += fd.dot(dx);
+    r_.E_slave = U - U0_;
+    const double E_out = r_.E_dev + r_.E_slave;
+    r_.E_out_max = std::max(r_.E_out_max, E_out);
+    r_.T_master_min = std::min(r_.T_master_min, tm_.energy());
+    r_.T_slave_min = std::min(r_.T_slave_min, ts_.energy());
+    r_.master_excursion = std::max(r_.master_excursion, xm_.norm());
+    r_.slave_excursion = std::max(r_.slave_excursion, s_.norm());
+    r_.max_force = std::max(r_.max_force, fd.norm());
+    const Eigen::Vector3d e = sp_ - p_.transparency.scale_factor * xm_;
+    sq_ += e.squaredNorm();
+    if (p_.trace_every > 0 && k % p_.trace_every == 0)
+      r_.trace.push_back(SimSample{ t, xm_.x(), s_.x(), sp_.x(), tm_.energy(), ts_.energy(), E_out, fd.x() });
+  }
+
+  const SimParams& p_;
+  SimResult r_;
+  TwistEstimator est_;
+  TransparencyChannel tr_;
+  EnergyTank tm_, ts_;
+  VelocityIntegrator vi_;
+  DelayChannel<MasterMsg> fwd_;
+  DelayChannel<Vector6d> bwd_;
+  DelayChannel<TankMsg> m2s_, s2m_;
+  // master and slave start at the origin: excursions and tracking error are measured from it
+  Eigen::Vector3d xm_ = Eigen::Vector3d::Zero(), vm_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sp_ = Eigen::Vector3d::Zero(), s_ = Eigen::Vector3d::Zero();
+  Vector6d f_dev_ = Vector6d::Zero();
+  Vector6d des_w_master_ = Vector6d::Zero();
+  Vector6d contact_sample_ = Vector6d::Zero();  // force of the wall on the tool (sampled)
+  EnergyInbox inbox_m_, inbox_s_;
+  double next_force_sample_ = 0.0;
+  double U0_ = 0.0, sq_ = 0.0;
+};
+}  // namespace
+
+SimResult runSimulation(const SimParams& p)
+{
+  return LoopSim(p).run();
 }
 
 }  // namespace saras_teleop
