@@ -41,7 +41,6 @@ def main():
     ecm = rand(k.ecm_joint_limits(), rng, n)
     touch = rand(k.touch_joint_limits(), rng, n)
     tips = [k.saras_arm_tip_in_rcm(q[7:])[:3, 3] for q in saras]
-    poses = [k.pose_to_position_quaternion(k.touch_handle_in_base(q)) for q in touch]
     rows = [
         ('saras_arm_tip_in_base (13 joints)', bench(k.saras_arm_tip_in_base, saras)),
         ('saras_arm_rcm_in_base (7 PA joints)', bench(lambda q: k.saras_arm_rcm_in_base(q[:7]), saras)),
@@ -51,7 +50,6 @@ def main():
         ('psm_ik_position', bench(lambda q: k.psm_ik_position(q[:3]), psm)),
         ('ecm_camera_poses', bench(lambda q: k.ecm_camera_poses(q, he), ecm)),
         ('touch_handle_in_base', bench(k.touch_handle_in_base, touch)),
-        ('touch_ik', bench(lambda pq: k.touch_ik(pq[0], pq[1]), poses)),
     ]
     setups = cfg.load_saras_arms()
     gen = [

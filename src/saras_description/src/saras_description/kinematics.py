@@ -23,7 +23,7 @@ from collections import OrderedDict
 import numpy as np
 
 from saras_description.geometry import EcmGeometry, PsmGeometry, SarasArmGeometry, TouchGeometry
-from saras_common.transforms import (quaternion_from_matrix, quaternion_to_matrix, rot_x, rot_y, rot_z,
+from saras_common.transforms import (quaternion_from_matrix, rot_x, rot_y, rot_z,
                                      transform_from_rpy, translation, wrap_angle)
 
 SARAS_ARM_PREFIXES = ('mesa_left/', 'mesa_right/')
@@ -279,57 +279,6 @@ def touch_handle_in_base(q):
     q = _vector(q, 6, 'touch_handle_in_base')
     return (touch_elbow_in_base(q) @ translation(z=-TouchGeometry.FOREARM) @ rot_z(q[3]) @ rot_y(q[4])
             @ rot_x(q[5]))
-
-
-def touch_ik(position, quaternion):
-    """Touch joint values whose handle pose equals the given one.
-
-    :param position: handle position in ``<p>base`` [m]
-    :param quaternion: handle orientation ``(x, y, z, w)`` in ``<p>base``
-    :returns: ``(q, ok)``: q (6 values, clamped into the joint limits) and ``ok`` = the pose is
-        reachable within the limits (then ``touch_handle_in_base(q)`` equals the pose). Of the
-        two arm branches (arm toward or away from the user) the one inside the limits is taken;
-        the elbow branch is ``|elbow| <= pi/2``.
-    """
-    p = _vector(position, 3, 'touch_ik position')
-    quat = _vector(quaternion, 4, 'touch_ik quaternion')
-    if np.linalg.norm(quat) < 1e-9:
-        raise ValueError('touch_ik: zero quaternion')
-    rot = quaternion_to_matrix(quat)
-    limits = touch_joint_limits()
-    lo = np.array([lim.lower for lim in limits.values()])
-    hi = np.array([lim.upper for lim in limits.values()])
-    horizontal = math.hypot(p[0], p[1])
-    waist = math.atan2(-p[1], -p[0]) if horizontal > 1e-12 else 0.0
-    best = None
-    for w, r in ((waist, horizontal), (wrap_angle(waist + math.pi), -horizontal)):
-        q, reachable = _touch_ik_branch(w, r, p[2], rot)
-        ok = reachable and within_limits(q, limits)
-        if ok:
-            return q, True
-        if best is None:
-            best = q
-    return np.clip(best, lo, hi), False
-
-
-def _touch_ik_branch(waist, r, height, rot):
-    """Arm joints for waist angle ``waist`` with the gimbal centre at signed distance ``r``
-    toward the user (-x of the waist frame) and ``height`` [m]; then the gimbal angles."""
-    g = TouchGeometry
-    l1, l2 = g.UPPER_ARM, g.FOREARM
-    z = height - g.SHOULDER_HEIGHT
-    s3 = (r * r + z * z - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
-    reachable = abs(s3) <= 1.0 + 1e-12
-    s3 = max(-1.0, min(1.0, s3))
-    elbow = math.asin(s3)
-    # (r, z) is (l1 + l2 sin(elbow), -l2 cos(elbow)) rotated by the shoulder angle.
-    shoulder = wrap_angle(math.atan2(z, r) - math.atan2(-l2 * math.cos(elbow), l1 + l2 * s3))
-    rw = touch_elbow_in_base([waist, shoulder, elbow])[:3, :3].T @ rot
-    # rw = Rz(yaw) Ry(pitch) Rx(roll)
-    pitch = math.atan2(-rw[2, 0], math.hypot(rw[0, 0], rw[1, 0]))
-    yaw = math.atan2(rw[1, 0], rw[0, 0])
-    roll = math.atan2(rw[2, 1], rw[2, 2])
-    return np.array([waist, shoulder, elbow, yaw, pitch, roll]), reachable
 
 
 def pose_to_position_quaternion(t):

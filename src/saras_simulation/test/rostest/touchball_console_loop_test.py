@@ -2,7 +2,7 @@
 """rostest (touchball_console_sim + touchball_receiver over real UDP): a force published on
 wrench_cmd travels back to the simulated console and moves the hand+device model by F/k
 (static deflection of the hand spring), on the commanded device only; when the commands stop,
-the device returns (console-side command timeout). Also: touch_<side>/joint_states (touch_ik)
+the device returns (console-side command timeout). Also: touch_<side>/joint_states (the receiver's Touch IK)
 reproduce the stylus pose through saras_description's forward kinematics."""
 import sys
 import threading
