@@ -9,8 +9,8 @@ pose, like the teleoperation's velocity integrator) and measures for ``--duratio
   * the rate and largest gap of ``/mesa_<side>/ee_pose``, ``joint_states`` and of the arm's TF
     (``mesa_<side>/tool_tip`` in ``/tf``, from robot_state_publisher);
   * the CPU % (of one core, from /proc) of every process of the arm stack;
-  * link drops (driver/state node ERROR on ``/saras/status`` after they were OK) and the
-    driver's dropped set-points (``rejected`` of its status);
+  * link drops (driver/state node ERROR on ``/diagnostics`` after they were OK) and the
+    driver's dropped set-points (its ``rejected``/``dropped`` counters);
 
 optionally with ``--load N`` busy-loop processes (nice 0) competing for the CPUs.
 With ``--platform`` the whole simulated platform runs instead (launch/platform.launch rviz:=false
@@ -152,35 +152,38 @@ def main():
 
 
 class ArmWatch(object):
-    """The first ee_pose of each arm and the arm components' ComponentStatus (level changes,
+    """The first ee_pose of each arm and the arm components' /diagnostics (level changes,
     rejected counters); the set-point publishers."""
 
     def __init__(self):
         import rospy
         from geometry_msgs.msg import PoseStamped
-        from saras_msgs.msg import ComponentStatus
-        self.OK, self.ERROR = ComponentStatus.OK, ComponentStatus.ERROR
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+        self.OK, self.ERROR = DiagnosticStatus.OK, DiagnosticStatus.ERROR
         self.start, self.status, self.pubs, self.subs = {}, {}, {}, []
         for side in SIDES:
             self.subs.append(rospy.Subscriber('/mesa_%s/ee_pose' % side, PoseStamped, self.on_pose, side,
                                               queue_size=1))
             self.pubs[side] = rospy.Publisher('/mesa_%s/target_pose' % side, PoseStamped, queue_size=1,
                                               tcp_nodelay=True)
-        self.subs.append(rospy.Subscriber('/saras/status', ComponentStatus, self.on_status, queue_size=100))
+        self.subs.append(rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics, queue_size=100))
 
     def on_pose(self, m, side):
         self.start.setdefault(side, m.pose.position)
 
-    def on_status(self, m):
-        if not m.component.startswith('mesa_'):
-            return
-        s = self.status.setdefault(m.component, {'ok': False, 'drops': 0, 'level': None, 'rejected': 0})
-        if m.level == self.OK:
-            s['ok'] = True
-        if s['ok'] and m.level == self.ERROR and s['level'] != self.ERROR:
-            s['drops'] += 1
-        s['level'] = m.level
-        s['rejected'] = m.rejected
+    def on_diagnostics(self, array):
+        for m in array.status:
+            component = m.name.split(':')[0].lstrip('/')
+            if not component.startswith('mesa_'):
+                continue
+            s = self.status.setdefault(component, {'ok': False, 'drops': 0, 'level': None, 'rejected': 0})
+            if m.level == self.OK:
+                s['ok'] = True
+            if s['ok'] and m.level == self.ERROR and s['level'] != self.ERROR:
+                s['drops'] += 1
+            s['level'] = m.level
+            s['rejected'] = sum(int(kv.value) for kv in m.values
+                                if kv.key.startswith(('rejected', 'dropped')) and kv.value.isdigit())
 
     def up(self):
         return len(self.start) == 2 and all(
