@@ -33,7 +33,8 @@ PA = [0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0]
 
 def serve(port, ready):
     model = SarasArmModel(sak.load('left', PA), max_velocity=3.0)
-    server = SarasArmServer(model, '127.0.0.1', port, 600.0, 300.0, key=KEY)
+    server = SarasArmServer(model, '127.0.0.1', port, 600.0, 300.0, key=KEY,
+                            event_rate=1e6, event_burst=10000)  # round trips back to back: no flood limit
     ready.set()
     server.run()
 

@@ -120,11 +120,16 @@ def stop(procs):
             os.killpg(p.pid, signal.SIGKILL)
 
 
+def console_key():
+    """The console link key of this run: $SARAS_KEY_DIR/console.key (bench/run creates it)."""
+    return os.path.join(os.environ.get('SARAS_KEY_DIR', '/etc/saras'), 'console.key')
+
+
 def measure(args, env, procs):
     """Starts the receiver and the console simulator (appended to ``procs``) and measures for
     ``args.duration`` s: (recorder, window, CPU seconds of receiver and simulator, dt, w0, w1)."""
     rx = subprocess.Popen(args.receiver.split() + [
-        '_port:=15501', '_command_port:=15502', '_joint_states_rate:=0.0',
+        '_port:=15501', '_command_port:=15502', '_joint_states_rate:=0.0', '_key_file:=' + console_key(),
         '_realtime_priority:=%d' % args.realtime_priority], env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     procs.append(rx)
@@ -133,7 +138,8 @@ def measure(args, env, procs):
     wait_for(lambda: rec.status, 30.0, 'touchball/status from the receiver')
     time.sleep(1.0)                                   # subscriber connections
     sim = subprocess.Popen(args.console.split() + [
-        '_target_port:=15501', '_command_port:=15502', '_rate:=%f' % args.rate], env=env,
+        '_target_port:=15501', '_command_port:=15502', '_rate:=%f' % args.rate,
+        '_key_file:=' + console_key()], env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     procs.append(sim)
     wait_for(lambda: rec.poses, 30.0, 'touchball/left/pose (console simulator streaming)')
