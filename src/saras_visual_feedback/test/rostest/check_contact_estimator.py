@@ -11,7 +11,8 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from saras_msgs.msg import Contact
 from std_msgs.msg import Float64MultiArray
 
-UNKNOWN_REASONS = {3, 4, 5, 6}  # ContactUnknown: out of view, occluded, no texture, no surface
+SCENE_REASONS = {3, 4, 5, 6}  # ContactUnknown: out of view, occluded, no texture, no surface
+NO_POSE = 2                   # ContactUnknown::kNoPose: the pose at the image stamp is missing (a busy host)
 
 
 class TestContactEstimator(unittest.TestCase):
@@ -36,7 +37,10 @@ class TestContactEstimator(unittest.TestCase):
             self.assertEqual(len(e.data), 9)
             self.assertEqual(e.data[1], 0.0, 'state must be unknown on untextured images: %s' % list(e.data))
             self.assertEqual(e.data[4], 0.0, 'unknown estimates have confidence 0')
-            self.assertIn(int(e.data[8]), UNKNOWN_REASONS)
+            self.assertIn(int(e.data[8]), SCENE_REASONS | {NO_POSE})
+        # the untextured scene itself is judged (not only missing poses)
+        self.assertTrue(any(int(e.data[8]) in SCENE_REASONS for e in estimates),
+                        'no estimate judged the scene: %s' % sorted({int(e.data[8]) for e in estimates}))
         self.assertEqual(contacts, [], 'an unknown contact must not be published as a Contact (depth 0)')
         self.assertTrue(status, 'no /diagnostics status of the contact estimator')
         self.assertEqual(status[-1].hardware_id, 'visual_feedback')
