@@ -5,40 +5,15 @@
 #include <XmlRpcValue.h>
 
 #include "saras_visual_feedback/contact_estimator_nodelet.h"
+#include "xml_fields.h"
 
 namespace saras_visual_feedback
 {
 namespace
 {
-std::runtime_error paramError(const std::string& name, const std::string& why)
-{
-  return std::runtime_error("invalid parameter ~" + name + ": " + why);
-}
-
-std::string xmlString(XmlRpc::XmlRpcValue& v, const std::string& key, const std::string& where, bool required,
-                      const std::string& def = "")
-{
-  if (!v.hasMember(key))
-  {
-    if (required)
-      throw paramError(where, "missing '" + key + "'");
-    return def;
-  }
-  if (v[key].getType() != XmlRpc::XmlRpcValue::TypeString)
-    throw paramError(where, "'" + key + "' must be a string");
-  return static_cast<std::string>(v[key]);
-}
-
-double xmlNumber(XmlRpc::XmlRpcValue& v, const std::string& key, double def, const std::string& where)
-{
-  if (!v.hasMember(key))
-    return def;
-  if (v[key].getType() == XmlRpc::XmlRpcValue::TypeInt)
-    return static_cast<int>(v[key]);
-  if (v[key].getType() != XmlRpc::XmlRpcValue::TypeDouble)
-    throw paramError(where, "'" + key + "' must be a number");
-  return static_cast<double>(v[key]);
-}
+using detail::paramError;
+using detail::xmlNumber;
+using detail::xmlString;
 
 ContactToolConfig readTool(XmlRpc::XmlRpcValue& v, const std::string& where)
 {

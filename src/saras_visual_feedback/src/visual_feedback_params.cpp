@@ -1,4 +1,5 @@
 #include "saras_visual_feedback/visual_feedback_params.h"
+#include "xml_fields.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -10,11 +11,8 @@ namespace saras_visual_feedback
 {
 namespace
 {
-/// A start-up parameter error: names the parameter; makes onInit fail (the node exits non-zero).
-std::runtime_error paramError(const std::string& name, const std::string& why)
-{
-  return std::runtime_error("invalid parameter ~" + name + ": " + why);
-}
+using detail::paramError;
+using detail::xmlString;
 
 double readPositive(const ros::NodeHandle& pnh, const std::string& name, double def, const char* unit)
 {
@@ -23,20 +21,6 @@ double readPositive(const ros::NodeHandle& pnh, const std::string& name, double 
   if (!(std::isfinite(v) && v > 0.0))
     throw paramError(name, "must be finite and > 0 " + std::string(unit) + ", got " + std::to_string(v));
   return v;
-}
-
-std::string xmlString(XmlRpc::XmlRpcValue& v, const std::string& key, const std::string& where, bool required,
-                      const std::string& def = "")
-{
-  if (!v.hasMember(key))
-  {
-    if (required)
-      throw paramError(where, "missing '" + key + "'");
-    return def;
-  }
-  if (v[key].getType() != XmlRpc::XmlRpcValue::TypeString)
-    throw paramError(where, "'" + key + "' must be a string");
-  return static_cast<std::string>(v[key]);
 }
 
 SceneStyle readStyle(const ros::NodeHandle& pnh)
