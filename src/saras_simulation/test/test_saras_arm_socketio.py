@@ -1,5 +1,4 @@
 """Simulator server and client over a real Socket.IO connection on 127.0.0.1 (no ROS)."""
-import socket
 import threading
 import time
 
@@ -13,28 +12,9 @@ from saras_drivers.saras_arm_client import NotConnected, SarasArmClient
 from saras_simulation.saras_arm_model import SarasArmModel
 from saras_simulation.saras_arm_server import SarasArmServer
 
-KEY = bytes(range(32))   # the arm link key of these tests
-ARM = 'mesa_left'
-
-#: A Positioning-Arm set-up pose [rad] (independent of saras_description's YAML).
-PA = [0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0]
-
-
-def _free_port():
-    s = socket.socket()
-    s.bind(('127.0.0.1', 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
-def _wait(pred, timeout):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if pred():
-            return True
-        time.sleep(0.01)
-    return pred()
+from arm_link_support import ARM, KEY, PA
+from arm_link_support import free_port as _free_port
+from arm_link_support import wait_until as _wait
 
 
 @pytest.fixture
