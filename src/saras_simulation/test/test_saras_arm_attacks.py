@@ -6,7 +6,6 @@ the legitimate, authenticated commander keeps control at its rate.
 """
 import json
 import multiprocessing
-import socket
 import time
 
 import engineio
