@@ -22,7 +22,7 @@ TIMEOUT = 30.0
     ('/state.json?x=1', ('state', None)), ('/events', ('events', None)),
     ('/stream/left.mjpg', ('stream', 'left')), ('/stream/right.mjpg?t=5', ('stream', 'right')),
     ('/frame/right.jpg', ('frame', 'right')), ('/stream/middle.mjpg', None), ('/../etc/passwd', None),
-    ('/state.json/', None), ('', None), ('http://[bad', None)])
+    ('/favicon.ico', ('empty', None)), ('/state.json/', None), ('', None), ('http://[bad', None)])
 def test_routes(path, expected):
     assert route(path) == expected
 

@@ -8,6 +8,7 @@ Routes (GET and HEAD only; every other method is 405, unknown paths 404, malform
   /events                 Server-Sent Events: the payload every ``update_period``
   /stream/<eye>.mjpg      multipart/x-mixed-replace of the eye's JPEG frames as received (no re-encoding)
   /frame/<eye>.jpg        the eye's newest JPEG (404 before the first frame)
+  /favicon.ico            204 (no icon)
 
 The image streams count as viewers: ``on_viewers(n)`` is called whenever the number of open image
 streams goes from 0 to 1 or back to 0, so the node subscribes to the images only while a browser
@@ -43,6 +44,8 @@ def route(raw_path):
         return ('state', None)
     if path == '/events':
         return ('events', None)
+    if path == '/favicon.ico':
+        return ('empty', None)
     for eye in EYES:
         if path == '/stream/%s.mjpg' % eye:
             return ('stream', eye)
@@ -205,6 +208,8 @@ class _Handler(BaseHTTPRequestHandler):
         try:
             if kind == 'static':
                 self._send(200, _STATIC[arg][1], self.view.html if _STATIC[arg][0] == 'page' else self.view.script, body)
+            elif kind == 'empty':
+                self._send(204, 'text/plain', b'', False)
             elif kind == 'state':
                 self._send(200, 'application/json', to_json(self.view.snapshot()), body)
             elif kind == 'frame':
