@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Run the whole platform headless in simulation for DURATION seconds and write:
 #   OUT/platform.bag            the recording (rosbag of src/saras_bringup/config/recording.yaml)
-#   OUT/report/index.html       plots, augmented stereo frame, rviz screenshot, topic table
+#   OUT/report/index.html       plots, augmented stereo frame, operator view page, rviz screenshot, topic table
 #   OUT/bag_check.txt           per-topic counts, rates, sequence/stamp gaps
 #   OUT/launch.log              everything the nodes printed
 # Exit status: 0 when every required stream was recorded at rate without lost messages,
@@ -46,8 +46,10 @@ sleep 1
 
 resource_defaults || exit 2
 echo "demo: platform for ${DURATION}s, ROS master :$port, display $DISPLAY, output $OUT, control rate ${CONTROL_RATE} Hz, endoscope ${endo_w}x${endo_h}"
+view_port="$(free_port)"   # operator view page (saras_operator_view), screenshot after the recording
 roslaunch -p "$port" "$SARAS_WS/launch/platform.launch" sim:=true rviz:=false record:=false \
-  control_rate:="$CONTROL_RATE" endoscope_width:="$endo_w" endoscope_height:="$endo_h" "$@" >"$OUT/launch.log" 2>&1 &
+  control_rate:="$CONTROL_RATE" endoscope_width:="$endo_w" endoscope_height:="$endo_h" \
+  operator_view_port:="$view_port" "$@" >"$OUT/launch.log" 2>&1 &
 launch_pid=$!
 pids=("$launch_pid" "${pids[@]}")
 
@@ -90,6 +92,11 @@ stop_pid "$record_pid" "the recorder" "$OUT/platform.bag.active"
 [ -n "${snap_pid:-}" ] && wait "$snap_pid"
 colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
 echo "demo: visual feedback: $colours"
+# after the recording (a browser costs a core for a few seconds): the operator view page as a browser shows it
+echo "demo: operator view page in headless Chromium"
+rosrun saras_operator_view page_screenshot "http://127.0.0.1:$view_port/" "$REPORT/operator_view.png" \
+  --json "$REPORT/operator_view.json" --timeout 60 >"$OUT/operator_view.log" 2>&1 \
+  || echo "demo: the operator view page was not live (see $OUT/operator_view.log)"
 # after the recording: querying ~35 nodes over XML-RPC stalls the 2-core host for seconds
 echo "demo: capturing the parameters and the node graph"
 rosparam dump "$OUT/params.yaml" 2>/dev/null || true
@@ -124,6 +131,7 @@ rosrun saras_bringup make_report "$OUT/platform.bag" "$REPORT" --check "$REPORT/
   --params "$OUT/params.yaml" \
   --extra "Augmented stereo endoscope frame|augmented_stereo.png|/visual_feedback/{left,right}/image (HMD images), last pair of the run; over the run: $colours" \
   --extra "Hand-eye calibration: robust solver vs OpenCV methods|hand_eye_bench.txt|src/saras_calibration/bench/run with TRIALS=${HANDEYE_TRIALS:-10} (README: 100 trials)" \
+  --extra "Operator view (browser page, headless Chromium)|operator_view.png|http://127.0.0.1:<operator_view_port>/ served by saras_operator_view during the run, captured after the recording: augmented stereo, tool distances with their colours, tank energies, component health; $(tail -n 1 "$OUT/operator_view.log" 2>/dev/null)" \
   --extra "rviz (headless, Xvfb)|rviz.png|the recording replayed into rviz (roslaunch saras_bringup replay.launch bag:=...), Figure 4 scene" \
   --summary "make demo DURATION=$DURATION CONTROL_RATE=$CONTROL_RATE: simulated platform, $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "demo: report at $REPORT/index.html"
