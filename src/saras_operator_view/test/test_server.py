@@ -196,3 +196,19 @@ def test_stop_releases_open_streams():
     srv.stop()
     resp.read()                                          # the stream ends
     assert time.monotonic() - t0 < TIMEOUT
+
+
+def test_ipv6_loopback():
+    live = LiveState(THR, COL, ['t'], 2.0)
+    try:
+        srv = OperatorViewServer(live, '::1', 0)
+    except OSError:
+        pytest.skip('no IPv6 loopback on this host')
+    srv.start()
+    try:
+        conn = http.client.HTTPConnection('::1', srv.address[1], timeout=TIMEOUT)
+        conn.request('GET', '/state.json')
+        assert conn.getresponse().status == 200
+        conn.close()
+    finally:
+        srv.stop()

@@ -106,7 +106,9 @@ class OperatorViewServer(object):
         self._viewers = 0
         self._stop = threading.Event()
         handler = type('Handler', (_Handler,), {'view': self, 'timeout': float(client_timeout)})
-        self.httpd = ThreadingHTTPServer((bind_address, int(port)), handler)
+        family = socket.AF_INET6 if ':' in bind_address else socket.AF_INET
+        server = type('Server', (ThreadingHTTPServer,), {'address_family': family})
+        self.httpd = server((bind_address, int(port)), handler)
         self.httpd.daemon_threads = True
         self._thread = None
 
