@@ -37,7 +37,8 @@ def test_thresholds_and_colours_equal_the_visual_feedback_overlay():
     ('bind_address', 'everywhere'), ('bind_address', 5), ('port', 70000), ('port', -1), ('port', 'http'),
     ('update_rate', 0.0), ('max_clients', 1), ('max_clients', 2.5), ('collision_colour', 'red'),
     ('warning_threshold', 0.001), ('left_image', 'relative/topic'), ('energies', []),
-    ('energies', ['/a/energy', '/a/energy']), ('client_timeout', float('nan'))])
+    ('energies', ['/a/energy', '/a/energy']), ('client_timeout', float('nan')), ('allowed_hosts', 'or-display'),
+    ('allowed_hosts', [''])])
 def test_bad_values_are_refused_naming_the_parameter(key, value):
     data = shipped()
     data[key] = value

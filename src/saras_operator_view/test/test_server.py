@@ -74,6 +74,19 @@ def test_page_is_self_contained(served):
     assert "default-src 'self'" in r.getheader('Content-Security-Policy')
 
 
+@pytest.mark.parametrize('host, status', [
+    ('127.0.0.1:8090', 200), ('localhost', 200), ('[::1]:8090', 200), ('LOCALHOST:1', 200),
+    ('evil.example:8090', 403), ('127.0.0.1.evil.example', 403), ('[::2]', 403)])
+def test_host_header_guards_against_dns_rebinding(served, host, status):
+    srv, _, _ = served
+    conn = http.client.HTTPConnection(*srv.address, timeout=TIMEOUT)
+    conn.putrequest('GET', '/state.json', skip_host=True)
+    conn.putheader('Host', host)
+    conn.endheaders()
+    assert conn.getresponse().status == status
+    conn.close()
+
+
 def test_state_json(served):
     srv, live, _ = served
     live.set_distances([0.001, 0.01, 0.05, float('nan')], srv.clock())

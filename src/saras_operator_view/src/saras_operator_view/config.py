@@ -19,6 +19,8 @@ SPEC = {
     'bind_address': ('127.0.0.1', prm.parsed(_address, 'IPv4/IPv6 address (127.0.0.1: this host only)'), '',
                      'address the HTTP server binds'),
     'port': (8090, prm.port, '', 'TCP port of the page (0: any free port)'),
+    'allowed_hosts': ([], prm.list_of(prm.non_empty_text, 0, 32), '',
+                      'host names (DNS) a browser may use for the page besides the addresses; others get 403'),
     'title': ('SARAS operator view', prm.non_empty_text, '', 'page title'),
     'update_rate': (5.0, prm.in_range(0.0, 50.0, low_open=True), 'Hz', 'distances/energies/health pushes per client'),
     'max_stream_rate': (30.0, prm.in_range(0.0, 120.0, low_open=True), 'Hz', 'image frames per stream at most'),

@@ -10,6 +10,10 @@ Routes (GET and HEAD only; every other method is 405, unknown paths 404, malform
   /frame/<eye>.jpg        the eye's newest JPEG (404 before the first frame)
   /favicon.ico            204 (no icon)
 
+A request whose Host header names a host outside ``allowed_hosts`` (plus the loopback names and
+the bind address) is refused with 403, so that a web page elsewhere cannot read the stream through
+DNS rebinding.
+
 The image streams count as viewers: ``on_viewers(n)`` is called whenever the number of open image
 streams goes from 0 to 1 or back to 0, so the node subscribes to the images only while a browser
 shows them. Long-lived connections (streams and events) are limited to ``max_clients``; a client
@@ -54,6 +58,14 @@ def route(raw_path):
     return None
 
 
+def host_name(header):
+    """Host name of a Host header value, lower case, without port or IPv6 brackets ('' if unset)."""
+    value = (header or '').strip().lower()
+    if value.startswith('['):
+        return value[1:value.find(']')] if ']' in value else value[1:]
+    return value.rsplit(':', 1)[0] if value.count(':') == 1 else value
+
+
 def mjpeg_part(jpeg):
     """One multipart part: headers, the JPEG bytes unchanged, then the next boundary (a browser
     shows a part once the boundary after it arrived)."""
@@ -91,7 +103,8 @@ class OperatorViewServer(object):
     """The HTTP server, started in a thread by :meth:`start`."""
 
     def __init__(self, live, bind_address, port, update_period=0.2, max_clients=8, max_stream_rate=30.0,
-                 client_timeout=10.0, clock=time.monotonic, on_viewers=None, title='SARAS operator view'):
+                 client_timeout=10.0, clock=time.monotonic, on_viewers=None, title='SARAS operator view',
+                 allowed_hosts=()):
         self.live = live
         self.update_period = float(update_period)
         self.max_clients = int(max_clients)
@@ -99,6 +112,9 @@ class OperatorViewServer(object):
         self.clock = clock
         self.on_viewers = on_viewers
         self.counters = Counters()
+        # Host names a browser may use for this page; any other is refused (DNS rebinding: a web
+        # page elsewhere resolving its own name to this address cannot read the stream)
+        self.allowed_hosts = {'127.0.0.1', 'localhost', '::1', bind_address.lower()} | {h.lower() for h in allowed_hosts}
         self.html = page.html(title).encode()
         self.script = page.SCRIPT.encode()
         self._lock = threading.Lock()
@@ -202,6 +218,10 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _serve(self, body):
         self.view.counters.add('requests')
+        host = self.headers.get('Host')
+        if host is not None and host_name(host) not in self.view.allowed_hosts:
+            self.send_error(403, 'unknown host name (allowed_hosts)')
+            return
         target = route(self.path)
         if target is None:
             self.send_error(404)
