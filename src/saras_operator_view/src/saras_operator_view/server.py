@@ -118,6 +118,7 @@ class OperatorViewServer(object):
         self.html = page.html(title).encode()
         self.script = page.SCRIPT.encode()
         self._lock = threading.Lock()
+        self._viewer_lock = threading.Lock()
         self._clients = 0
         self._viewers = 0
         self._stop = threading.Event()
@@ -158,27 +159,34 @@ class OperatorViewServer(object):
     def clients(self):
         """(long-lived connections, image streams) now open."""
         with self._lock:
-            return self._clients, self._viewers
+            clients = self._clients
+        with self._viewer_lock:
+            return clients, self._viewers
 
     def acquire(self, image):
-        """Admit one long-lived connection (an image stream if ``image``); False when full."""
+        """Admit one long-lived connection (an image stream if ``image``); False when full. The first
+        image stream calls ``on_viewers(1)``; the count and the call are one step, so that a stream
+        closing at the same time cannot reorder subscribe and unsubscribe."""
         with self._lock:
             if self._clients >= self.max_clients:
                 return False
             self._clients += 1
-            first = image and self._viewers == 0
-            self._viewers += 1 if image else 0
-        if first and self.on_viewers:
-            self.on_viewers(1)
+        if image:
+            with self._viewer_lock:
+                self._viewers += 1
+                if self._viewers == 1 and self.on_viewers:
+                    self.on_viewers(1)
         return True
 
     def release(self, image):
+        """End a connection admitted by :meth:`acquire`; the last image stream calls ``on_viewers(0)``."""
+        if image:
+            with self._viewer_lock:
+                self._viewers -= 1
+                if self._viewers == 0 and self.on_viewers:
+                    self.on_viewers(0)
         with self._lock:
             self._clients -= 1
-            self._viewers -= 1 if image else 0
-            last = image and self._viewers == 0
-        if last and self.on_viewers:
-            self.on_viewers(0)
 
 
 class _Handler(BaseHTTPRequestHandler):
