@@ -55,6 +55,9 @@ mapfile -t gtest_rostest < <(find "$results_dir" -name '*.xml' -not -path '*/pyt
 count "package pytest suites" "${package_pytest[@]}"
 count "gtest + rostest" "${gtest_rostest[@]}"
 
+# the failed test cases last, so that a truncated CI log still names them
+python3 "$here/junit_counts.py" --failures "$results_dir/pytest/pytest.xml" "${package_pytest[@]}" \
+  "${gtest_rostest[@]}" | head -n 15
 echo
 if [ ${#failed_suites[@]} -ne 0 ]; then
   echo "FAILED suites: ${failed_suites[*]}"

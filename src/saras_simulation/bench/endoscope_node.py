@@ -20,13 +20,12 @@ Case names: <height>p<fps><m|s> (m = ECM moving, s = still). Needs the workspace
 """
 import argparse
 import os
-import signal
 import subprocess
 import sys
 import tempfile
 import time
 
-from saras_simulation.bench_util import cpu_seconds, free_port
+from saras_simulation.bench_util import cpu_seconds, free_port, stop_process_groups
 
 LAUNCH = """<launch>
   <group ns="/dvrk">
@@ -121,16 +120,7 @@ def run_case(height, fps, moving, renderer, args):
         cpu = 100.0 * (c1 - c0) / dt if (c0 is not None and c1 is not None) else float('nan')
         return rates, cpu, load0, load1
     finally:
-        for p in reversed(procs):
-            try:
-                os.killpg(p.pid, signal.SIGINT)
-            except OSError:
-                pass
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
+        stop_process_groups(procs, timeout=10.0)
         os.unlink(path)
 
 

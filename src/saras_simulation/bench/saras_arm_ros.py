@@ -30,7 +30,7 @@ import tempfile
 import threading
 import time
 
-from saras_simulation.bench_util import cpu_seconds, free_port
+from saras_simulation.bench_util import cpu_seconds, free_port, stop_process_groups
 
 SIDES = ('left', 'right')
 
@@ -139,16 +139,7 @@ def main():
                                           start_new_session=True))
         return measure(args, procs)
     finally:
-        for p in reversed(procs):
-            try:
-                os.killpg(p.pid, signal.SIGINT)
-            except OSError:
-                pass
-        for p in reversed(procs):
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
+        stop_process_groups(procs, timeout=15.0)
 
 
 class ArmWatch(object):

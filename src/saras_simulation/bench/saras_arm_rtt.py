@@ -23,6 +23,7 @@ from saras_drivers import saras_arm_kinematics as sak
 from saras_drivers import saras_arm_protocol as proto
 from saras_drivers.saras_arm_client import SarasArmClient
 from saras_simulation.saras_arm_model import SarasArmModel
+from saras_simulation.bench_util import cpu_seconds
 from saras_simulation.saras_arm_server import SarasArmServer
 
 KEY = bytes(range(32))   # the arm link key of these tests
@@ -38,11 +39,6 @@ def serve(port, ready):
     ready.set()
     server.run()
 
-
-def cpu_seconds(pid):
-    with open('/proc/%d/stat' % pid) as f:
-        fields = f.read().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def pct(v, q):

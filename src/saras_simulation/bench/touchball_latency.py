@@ -19,7 +19,6 @@ Usage: touchball_latency.py [--duration S] [--rate HZ] [--subscribers control|po
 """
 import argparse
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -29,16 +28,12 @@ import rospy
 from geometry_msgs.msg import PoseStamped
 
 from saras_msgs.msg import ComponentStatus, HapticDeviceState
+from saras_simulation.bench_util import cpu_seconds, stop_process_groups
 
 MASTER_PORT = 11631
 CONTROL = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
            for t in ('twist', 'buttons')] + ['/touchball/right/state', '/touchball/right/pose', '/tf']
 
-
-def cpu_seconds(pid):
-    with open('/proc/%d/stat' % pid) as f:
-        fields = f.read().rsplit(')', 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def pct(values, q):
@@ -108,16 +103,7 @@ class Recorder(object):
 
 
 def stop(procs):
-    for p in reversed(procs):
-        try:
-            os.killpg(p.pid, signal.SIGINT)
-        except ProcessLookupError:
-            pass
-    for p in reversed(procs):
-        try:
-            p.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
+    stop_process_groups(procs, timeout=10.0)
 
 
 def console_key():

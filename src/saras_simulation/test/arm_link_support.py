@@ -1,21 +1,13 @@
 """Shared by the SARAS arm link tests (test_saras_arm_socketio.py, test_saras_arm_attacks.py):
 the link key and arm of the tests, a set-up pose, a free loopback port and a polling wait."""
-import socket
 import time
+
+from saras_simulation.bench_util import free_port  # noqa: F401 (re-exported for the link tests)
 
 KEY = bytes(range(32))   # the arm link key of these tests
 ARM = 'mesa_left'
 #: A Positioning-Arm set-up pose [rad] (independent of saras_description's YAML).
 PA = [0.0, 0.5, 0.0, 1.3, 0.0, 1.0, 0.0]
-
-
-def free_port():
-    """A free TCP port on 127.0.0.1."""
-    s = socket.socket()
-    s.bind(('127.0.0.1', 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
 
 
 def wait_until(pred, timeout):

@@ -40,6 +40,8 @@ EXPECTED = {
     'mesa_left/saras_arm_sim: server': '/Simulation',
     'contact_sim: contact': '/Simulation',
     'recorder: bag': '/Recording',
+    'clock_monitor: teleop_pc': '/Clocks',
+    'netem_relay: teleop_link forward': '/Network impairment (test relays)',
     'unknown_node: thing': '/Other',
 }
 

@@ -1,7 +1,10 @@
 """Small helpers of the saras_simulation benchmarks (bench/*.py) and tests: a free TCP port for a
-private roscore, the CPU time of a process (Linux /proc) and a built executable of this package."""
+private roscore, the CPU time of a process (Linux /proc), a built executable of this package and the
+clean stop of the process groups a benchmark started."""
 import os
+import signal
 import socket
+import subprocess
 
 
 def free_port():
@@ -34,3 +37,22 @@ def find_devel_executable(name, package='saras_simulation'):
         if os.access(exe, os.X_OK):
             return exe
     return None
+
+
+def stop_process_groups(procs, timeout=10.0):
+    """SIGINT the process group of every ``subprocess.Popen`` in ``procs`` (started with
+    ``start_new_session=True``), newest first, as roslaunch expects; SIGKILL the groups that are
+    still alive ``timeout`` seconds later."""
+    for p in reversed(procs):
+        try:
+            os.killpg(p.pid, signal.SIGINT)
+        except OSError:
+            pass
+    for p in reversed(procs):
+        try:
+            p.wait(timeout)
+        except subprocess.TimeoutExpired:
+            try:
+                os.killpg(p.pid, signal.SIGKILL)
+            except OSError:
+                pass
