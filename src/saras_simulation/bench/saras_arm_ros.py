@@ -122,7 +122,7 @@ def main():
             platform = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', '..',
                                     'launch', 'platform.launch')
             procs.append(subprocess.Popen(
-                ['roslaunch', '--wait', platform, 'rviz:=false', 'record:=false',
+                ['roslaunch', '--wait', platform, 'rviz:=false', 'record:=false', 'operator_view:=false',
                  'control_rate:=%g' % args.control_rate, 'left_arm_port:=%d' % free_port(),
                  'right_arm_port:=%d' % free_port(), 'console_port:=%d' % free_port()],
                 env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
