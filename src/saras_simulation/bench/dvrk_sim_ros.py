@@ -117,6 +117,9 @@ def measure(args):
             p.wait()
         os.killpg(recorder.pid, signal.SIGINT)
         recorder.wait(30)
+    end = time.monotonic() + 30.0          # the C++ recorder closes the bag after its wrapper exits
+    while not os.path.exists(bag) and time.monotonic() < end:
+        time.sleep(0.2)
     stats = bag_stats(bag, w0, w1)
     window = (w1 - w0).to_sec()
     print('dvrk_sim (link_tf, crtk %s), %.0f s, %d busy-loop processes on %d CPUs; dvrk_sim CPU %.1f %% '
