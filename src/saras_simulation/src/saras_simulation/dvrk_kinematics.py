@@ -74,21 +74,24 @@ def _compose(cols, p, fcols, fp):
 
 def pose_error(T, goal, orientation_weight=1.0):
     """6-vector (position [m], weighted rotation vector [rad]) from ``T`` to ``goal`` (base frame)."""
-    dp = goal[:3, 3] - T[:3, 3]
-    Rerr = goal[:3, :3] @ T[:3, :3].T
-    c = max(-1.0, min(1.0, (np.trace(Rerr) - 1.0) / 2.0))
+    t, g = T[:3].tolist(), goal[:3].tolist()
+    # Rerr = Rgoal Rt^T: Rerr[i][j] = row i of Rgoal . row j of Rt
+    r = [[g[i][0] * t[j][0] + g[i][1] * t[j][1] + g[i][2] * t[j][2] for j in range(3)] for i in range(3)]
+    c = max(-1.0, min(1.0, (r[0][0] + r[1][1] + r[2][2] - 1.0) / 2.0))
     angle = math.acos(c)
-    v = np.array([Rerr[2, 1] - Rerr[1, 2], Rerr[0, 2] - Rerr[2, 0], Rerr[1, 0] - Rerr[0, 1]])
+    v = (r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1])
     if angle < 1e-9:
-        w = 0.5 * v
+        f = 0.5
     elif math.pi - angle < 1e-6:
         # half-turn: axis from the symmetric part
-        k = int(np.argmax(np.diag(Rerr)))
-        axis = (Rerr[:, k] + np.eye(3)[k]) / math.sqrt(2.0 * (1.0 + Rerr[k, k]))
-        w = angle * axis
+        k = max(range(3), key=lambda i: r[i][i])
+        n = math.sqrt(2.0 * (1.0 + r[k][k]))
+        v = tuple(r[i][k] + (1.0 if i == k else 0.0) for i in range(3))
+        f = angle / n
     else:
-        w = angle / (2.0 * math.sin(angle)) * v
-    return np.concatenate([dp, orientation_weight * w])
+        f = angle / (2.0 * math.sin(angle))
+    f *= orientation_weight
+    return np.array([g[0][3] - t[0][3], g[1][3] - t[1][3], g[2][3] - t[2][3], f * v[0], f * v[1], f * v[2]])
 
 
 class Chain(object):
@@ -187,7 +190,9 @@ class Chain(object):
         T, J = self.fk(q, jacobian=True)
         err = pose_error(T, goal, self.orientation_weight)
         Jw = J * self._weights[:, None]
-        return self.clamp(q + Jw.T @ np.linalg.solve(Jw @ Jw.T + damping * np.eye(6), err))
+        A = Jw @ Jw.T
+        A[np.diag_indices(6)] += damping
+        return self.clamp(q + Jw.T @ np.linalg.solve(A, err))
 
 
 def psm_chain(limits=None):

@@ -46,6 +46,12 @@ def fill_pose(pose, T):
     pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
 
 
+def _listened(pubs):
+    """Whether any of the publishers ``pubs`` has a subscriber (else a message built for them
+    would be dropped by rospy anyway)."""
+    return any(p.get_num_connections() for p in pubs)
+
+
 class ArmRos(object):
     """Topics of one arm. ``kind`` is 'PSM', 'ECM' or 'MTM'; ``lock`` guards ``core``."""
 
@@ -187,7 +193,7 @@ class ArmRos(object):
         it (else computed here). ``with_aux``: also jacobians and wrenches. The messages are
         allocated once and refilled: rospy serialises them in publish()."""
         J = None
-        if with_aux and self.v2:
+        if with_aux and self.v2 and _listened(self.v2['jacobian']):
             T, J = self.core.chain.fk(q, jacobian=True)
         elif T is None:
             T = self.core.chain.fk(q)
@@ -207,14 +213,14 @@ class ArmRos(object):
             cv = self.msgs['cv']
             cv.header.stamp = stamp
             v = (0.0,) * 6
-            if self.prev_cp is not None and stamp > self.prev_cp[0]:
+            if self.prev_cp is not None and stamp > self.prev_cp[0] and _listened(self.v2['cv']):
                 v = dvrk_kinematics.twist(self.prev_cp[1], T, (stamp - self.prev_cp[0]).to_sec())
             (cv.twist.linear.x, cv.twist.linear.y, cv.twist.linear.z,
              cv.twist.angular.x, cv.twist.angular.y, cv.twist.angular.z) = v
             self.prev_cp = (stamp, T)
             for p in self.v2['cv']:
                 p.publish(cv)
-            if J is not None:
+            if with_aux:
                 self._publish_aux(J, T, stamp)
         return T
 
@@ -226,14 +232,16 @@ class ArmRos(object):
                 p.publish(msg)
 
     def _publish_aux(self, J, T, stamp):
-        body = np.zeros_like(J)
-        Rt = T[:3, :3].T
-        body[:3], body[3:] = Rt @ J[:3], Rt @ J[3:]
-        for p, M in zip(self.v2['jacobian'], (J, body)):
-            m = Float64MultiArray(data=list(M.ravel()))
-            m.layout.dim = [MultiArrayDimension('rows', M.shape[0], M.size),
-                            MultiArrayDimension('cols', M.shape[1], M.shape[1])]
-            p.publish(m)
+        """Jacobians (``J`` None: nobody listens to them) and the (zero) wrenches."""
+        if J is not None:
+            body = np.zeros_like(J)
+            Rt = T[:3, :3].T
+            body[:3], body[3:] = Rt @ J[:3], Rt @ J[3:]
+            for p, M in zip(self.v2['jacobian'], (J, body)):
+                m = Float64MultiArray(data=list(M.ravel()))
+                m.layout.dim = [MultiArrayDimension('rows', M.shape[0], M.size),
+                                MultiArrayDimension('cols', M.shape[1], M.shape[1])]
+                p.publish(m)
         w = WrenchStamped()
         w.header.stamp, w.header.frame_id = stamp, self.core.name
         for p in self.v2['cf']:
