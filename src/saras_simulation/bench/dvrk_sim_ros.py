@@ -8,7 +8,8 @@ the arms' joint TF from dvrk_sim), records the dVRK streams the platform's recor
 /tf with rosbag (a C++ subscriber, like the recorder) for ``--duration`` seconds and prints:
 
   * each stream's rate (messages / window) and largest receive gap;
-  * the CPU % (of one core, from /proc) of the dvrk_sim process;
+  * the CPU % (of one core, from /proc) of the dvrk_sim process and its CPU time per published
+    sample (less dependent on what else runs);
   * dvrk_sim's own count of skipped samples (its ``skipped`` on /diagnostics).
 
 optionally with ``--load N`` busy-loop processes (nice 0) competing for the CPUs, and ``--crtk``
@@ -122,9 +123,11 @@ def measure(args):
         time.sleep(0.2)
     stats = bag_stats(bag, w0, w1)
     window = (w1 - w0).to_sec()
-    print('dvrk_sim (link_tf, crtk %s), %.0f s, %d busy-loop processes on %d CPUs; dvrk_sim CPU %.1f %% '
-          'of one core, %d samples skipped' % (args.crtk, dt, args.load, os.cpu_count(),
-                                                100.0 * (cpu1 - cpu0) / dt, skipped1 - skipped0))
+    samples = stats.get(STREAMS[0], (0, 0.0))[0]
+    print('dvrk_sim (link_tf, crtk %s), %.0f s, %d busy-loop processes on %d CPUs, loadavg %.1f; dvrk_sim '
+          'CPU %.1f %% of one core, %.0f us per sample, %d samples skipped'
+          % (args.crtk, dt, args.load, os.cpu_count(), os.getloadavg()[0], 100.0 * (cpu1 - cpu0) / dt,
+             1e6 * (cpu1 - cpu0) / max(samples, 1), skipped1 - skipped0))
     print('| stream (recorded by rosbag) | messages | rate [Hz] | largest receive gap [ms] |')
     print('|---|---|---|---|')
     for k in ['/tf'] + STREAMS:
