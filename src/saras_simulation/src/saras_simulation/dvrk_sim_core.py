@@ -40,7 +40,8 @@ NODE_PARAMS = {
     'publish_link_tf': (False, prm.boolean, '', "the arms' URDF joint TF"),
     'link_tf_rate': (50.0, prm.non_negative, 'Hz', 'publish_link_tf rate (0 = every sample)'),
     'robot_description_param': ('/{arm}/robot_description',
-                                prm.Rule("text containing '{arm}'", lambda v: isinstance(v, str) and '{arm}' in v),
+                                prm.Rule("text containing '{arm}'",
+                                         lambda v: isinstance(v, str) and '{arm}' in v),
                                 '', 'URDF parameter of each arm for publish_link_tf'),
 }
 
