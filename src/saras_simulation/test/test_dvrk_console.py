@@ -144,3 +144,48 @@ def test_psms_follow_the_mtms_and_hold_during_clutch(cfg):
     assert worst < 1e-3                                  # PSMs = the surgeon's intent
     assert [c for _, c in clutch_seen] == [False, True, False]
     assert np.linalg.norm(out['MTMR'][2][:3, 3] - held[1]) > 0.01   # the hand moved meanwhile
+
+
+def test_node_parameters_shipped_config_is_valid_and_bad_values_are_named(cfg):
+    from saras_common import params as prm
+    p = prm.read(cfg, dvrk_sim_core.NODE_PARAMS)
+    assert p['rate'] == 100.0 and p['max_catch_up'] >= 1 and p['publish_queue_size'] == 0
+    assert prm.read({}, dvrk_sim_core.NODE_PARAMS)['link_tf_rate'] == 50.0    # defaults are valid
+    for key, bad in (('rate', 0.5), ('max_catch_up', 2.5), ('crtk_ns', 'PSM'), ('publish_tf', 'yes'),
+                     ('link_tf_rate', -1.0), ('robot_description_param', '/PSM1/robot_description')):
+        with pytest.raises(prm.ParamError, match='~%s' % key):
+            prm.read(dict(cfg, **{key: bad}), dvrk_sim_core.NODE_PARAMS)
+
+
+def test_forward_pass_is_that_of_the_composed_elements():
+    """Chain.fk (arithmetic on floats) against the product of its elements' 4x4 matrices."""
+    rng = np.random.default_rng(5)
+    for chain in (dvrk_kinematics.psm_chain(), dvrk_kinematics.ecm_chain(), dvrk_kinematics.mtm_chain()):
+        for _ in range(5):
+            q = rng.uniform(-1.0, 1.0, chain.n)
+            T, i = np.eye(4), 0
+            for e in chain.elements:
+                if e[0] == 'fixed':
+                    T = T @ e[1]
+                    continue
+                v = e[2] * q[i] + e[3]
+                i += 1
+                T = T @ (dvrk_kinematics._rot(e[1], v) if e[0] == 'r' else dvrk_kinematics._trans(e[1], v))
+            np.testing.assert_allclose(chain.fk(q), T, atol=1e-12)
+            np.testing.assert_allclose(chain.fk(list(q), jacobian=True)[0], T, atol=1e-12)
+        with pytest.raises(ValueError):
+            chain.fk(np.zeros(chain.n + 1))
+
+
+@pytest.mark.parametrize('axis, angle', [((1, 0, 0), math.pi), ((0, 1, 1), math.pi), ((0, 0, 1), 0.3),
+                                         ((1, -2, 0.5), 2.0), ((0, 1, 0), 0.0)])
+def test_pose_error_is_the_translation_and_the_rotation_vector(axis, angle):
+    from saras_common import transforms
+    a = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    T = np.eye(4)
+    T[:3, 3] = [0.01, -0.02, 0.03]
+    goal = np.eye(4)
+    goal[:3, :3] = transforms.axis_angle(a, angle)[:3, :3]
+    err = dvrk_kinematics.pose_error(T, goal, orientation_weight=0.5)
+    np.testing.assert_allclose(err[:3], [-0.01, 0.02, -0.03], atol=1e-15)
+    np.testing.assert_allclose(err[3:], 0.5 * angle * a, atol=1e-9)

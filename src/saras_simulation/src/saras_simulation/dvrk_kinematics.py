@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 _AXES = {'x': 0, 'y': 1, 'z': 2}
+_OTHER = ((1, 2), (2, 0), (0, 1))   # the two other axes of x, y, z, in right-handed order
 
 #: dVRK 1.x MTM joint names (state_joint_current / measured_js of MTML, MTMR).
 MTM_JOINT_NAMES = ('outer_yaw', 'shoulder_pitch', 'elbow_pitch', 'wrist_platform', 'wrist_pitch',
@@ -61,23 +62,36 @@ def prismatic(axis, sign=1.0, offset=0.0):
     return ('p', axis, float(sign), float(offset))
 
 
+def _compose(cols, p, fcols, fp):
+    """(R, p) @ (Rf, pf) with rotations as lists of 3 columns: (R Rf, p + R pf)."""
+    x, y, z = cols
+    out = [[x[0] * f[0] + y[0] * f[1] + z[0] * f[2], x[1] * f[0] + y[1] * f[1] + z[1] * f[2],
+            x[2] * f[0] + y[2] * f[1] + z[2] * f[2]] for f in fcols]
+    return out, [p[0] + x[0] * fp[0] + y[0] * fp[1] + z[0] * fp[2],
+                 p[1] + x[1] * fp[0] + y[1] * fp[1] + z[1] * fp[2],
+                 p[2] + x[2] * fp[0] + y[2] * fp[1] + z[2] * fp[2]]
+
+
 def pose_error(T, goal, orientation_weight=1.0):
     """6-vector (position [m], weighted rotation vector [rad]) from ``T`` to ``goal`` (base frame)."""
-    dp = goal[:3, 3] - T[:3, 3]
-    Rerr = goal[:3, :3] @ T[:3, :3].T
-    c = max(-1.0, min(1.0, (np.trace(Rerr) - 1.0) / 2.0))
+    t, g = T[:3].tolist(), goal[:3].tolist()
+    # Rerr = Rgoal Rt^T: Rerr[i][j] = row i of Rgoal . row j of Rt
+    r = [[g[i][0] * t[j][0] + g[i][1] * t[j][1] + g[i][2] * t[j][2] for j in range(3)] for i in range(3)]
+    c = max(-1.0, min(1.0, (r[0][0] + r[1][1] + r[2][2] - 1.0) / 2.0))
     angle = math.acos(c)
-    v = np.array([Rerr[2, 1] - Rerr[1, 2], Rerr[0, 2] - Rerr[2, 0], Rerr[1, 0] - Rerr[0, 1]])
+    v = (r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1])
     if angle < 1e-9:
-        w = 0.5 * v
+        f = 0.5
     elif math.pi - angle < 1e-6:
         # half-turn: axis from the symmetric part
-        k = int(np.argmax(np.diag(Rerr)))
-        axis = (Rerr[:, k] + np.eye(3)[k]) / math.sqrt(2.0 * (1.0 + Rerr[k, k]))
-        w = angle * axis
+        k = max(range(3), key=lambda i: r[i][i])
+        n = math.sqrt(2.0 * (1.0 + r[k][k]))
+        v = tuple(r[i][k] + (1.0 if i == k else 0.0) for i in range(3))
+        f = angle / n
     else:
-        w = angle / (2.0 * math.sin(angle)) * v
-    return np.concatenate([dp, orientation_weight * w])
+        f = angle / (2.0 * math.sin(angle))
+    f *= orientation_weight
+    return np.array([g[0][3] - t[0][3], g[1][3] - t[1][3], g[2][3] - t[2][3], f * v[0], f * v[1], f * v[2]])
 
 
 class Chain(object):
@@ -91,44 +105,59 @@ class Chain(object):
         if self.limits is not None and self.limits.shape != (self.n, 2):
             raise ValueError('Chain: limits must be %d (lower, upper) pairs' % self.n)
         self.orientation_weight = float(orientation_weight)
+        self._compiled = [('fixed', [list(e[1][:3, c]) for c in range(3)], list(e[1][:3, 3]))
+                          if e[0] == 'fixed' else (e[0], _AXES[e[1]], e[2], e[3]) for e in self.elements]
+        self._weights = np.array([1.0, 1.0, 1.0] + [self.orientation_weight] * 3)
 
     def fk(self, q, jacobian=False):
         """Tip pose (4x4); with ``jacobian`` also the 6 x n geometric Jacobian (linear; angular),
-        in the base frame (the dVRK's spatial Jacobian convention)."""
+        in the base frame (the dVRK's spatial Jacobian convention).
+
+        Computed on Python floats (rotation columns and position as lists), one numpy array built
+        at the end: for these 4-7 joint chains, numpy's per-call overhead on 3-vectors costs
+        several times the arithmetic."""
         q = np.asarray(q, dtype=float)
         if q.shape != (self.n,):
             raise ValueError('Chain.fk: %d joint values expected, got %s' % (self.n, q.shape))
-        T = np.eye(4)
-        joints = []
+        q = q.tolist()
+        cols = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]   # rotation columns x, y, z
+        p = [0.0, 0.0, 0.0]
+        joints = [] if jacobian else None
         i = 0
-        for e in self.elements:
+        for e in self._compiled:
             if e[0] == 'fixed':
-                T = T @ e[1]
+                cols, p = _compose(cols, p, e[1], e[2])
                 continue
-            kind, axis, sign, offset = e
+            kind, a, sign, offset = e
             v = sign * q[i] + offset
-            a = _AXES[axis]
-            if jacobian:
-                joints.append((kind, T[:3, a] * sign, T[:3, 3].copy()))
-            if kind == 'r':      # T @ rotation about axis a: mixes the two other columns
-                j, k = (a + 1) % 3, (a + 2) % 3
-                c, s = math.cos(v), math.sin(v)
-                cj, ck = T[:3, j].copy(), T[:3, k]
-                T[:3, j] = c * cj + s * ck
-                T[:3, k] = c * ck - s * cj
-            else:                # T @ translation along axis a
-                T[:3, 3] += v * T[:3, a]
             i += 1
+            ca = cols[a]
+            if jacobian:
+                joints.append((kind, (ca[0] * sign, ca[1] * sign, ca[2] * sign), tuple(p)))
+            if kind == 'r':      # post-multiplied rotation about axis a: mixes the two other columns
+                j, k = _OTHER[a]
+                c, s = math.cos(v), math.sin(v)
+                cj, ck = cols[j], cols[k]
+                cols = list(cols)
+                cols[j] = [c * cj[0] + s * ck[0], c * cj[1] + s * ck[1], c * cj[2] + s * ck[2]]
+                cols[k] = [c * ck[0] - s * cj[0], c * ck[1] - s * cj[1], c * ck[2] - s * cj[2]]
+            else:                # post-multiplied translation along axis a
+                p = [p[0] + v * ca[0], p[1] + v * ca[1], p[2] + v * ca[2]]
+        x, y, z = cols
+        T = np.array([[x[0], y[0], z[0], p[0]], [x[1], y[1], z[1], p[1]], [x[2], y[2], z[2], p[2]],
+                      [0.0, 0.0, 0.0, 1.0]])
         if not jacobian:
             return T
-        J = np.zeros((6, self.n))
-        for k, (kind, a, p) in enumerate(joints):
-            if kind == 'r':
-                J[:3, k] = np.cross(a, T[:3, 3] - p)
-                J[3:, k] = a
+        rows = [[0.0] * self.n for _ in range(6)]
+        for k, (kind, a, o) in enumerate(joints):
+            if kind == 'r':      # linear: a x (tip - joint origin); angular: a
+                d0, d1, d2 = p[0] - o[0], p[1] - o[1], p[2] - o[2]
+                rows[0][k], rows[1][k], rows[2][k] = a[1] * d2 - a[2] * d1, a[2] * d0 - a[0] * d2, \
+                    a[0] * d1 - a[1] * d0
+                rows[3][k], rows[4][k], rows[5][k] = a
             else:
-                J[:3, k] = a
-        return T, J
+                rows[0][k], rows[1][k], rows[2][k] = a
+        return T, np.array(rows)
 
     def clamp(self, q):
         if self.limits is None:
@@ -140,7 +169,7 @@ class Chain(object):
         within the limits). Returns ``(q, residual)``; residual = norm of the remaining weighted
         pose error (m / rad)."""
         q = self.clamp(np.array(q0, dtype=float))
-        W = np.array([1.0, 1.0, 1.0] + [self.orientation_weight] * 3)
+        W = self._weights
         err = None
         for _ in range(max_iter):
             T, J = self.fk(q, jacobian=True)
@@ -154,16 +183,16 @@ class Chain(object):
             err = pose_error(self.fk(q), goal, self.orientation_weight)
         return q, float(np.linalg.norm(err))
 
-
     def track(self, goal, q, damping=1e-4):
         """One damped-least-squares step from ``q`` towards ``goal``: the per-tick update of a
         smoothly moving goal (second-order error), at the cost of one forward pass."""
         q = np.asarray(q, dtype=float)
         T, J = self.fk(q, jacobian=True)
         err = pose_error(T, goal, self.orientation_weight)
-        W = np.array([1.0, 1.0, 1.0] + [self.orientation_weight] * 3)
-        Jw = J * W[:, None]
-        return self.clamp(q + Jw.T @ np.linalg.solve(Jw @ Jw.T + damping * np.eye(6), err))
+        Jw = J * self._weights[:, None]
+        A = Jw @ Jw.T
+        A[np.diag_indices(6)] += damping
+        return self.clamp(q + Jw.T @ np.linalg.solve(A, err))
 
 
 def psm_chain(limits=None):

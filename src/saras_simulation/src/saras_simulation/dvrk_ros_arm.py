@@ -46,6 +46,12 @@ def fill_pose(pose, T):
     pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
 
 
+def _listened(pubs):
+    """Whether any of the publishers ``pubs`` has a subscriber (else a message built for them
+    would be dropped by rospy anyway)."""
+    return any(p.get_num_connections() for p in pubs)
+
+
 class ArmRos(object):
     """Topics of one arm. ``kind`` is 'PSM', 'ECM' or 'MTM'; ``lock`` guards ``core``."""
 
@@ -66,6 +72,9 @@ class ArmRos(object):
             self.v1['jaw'] = pub(one + 'state_jaw_current', JointState)
         elif kind == 'MTM':
             self.v1['jaw'] = pub(one + 'state_gripper_current', JointState)
+        self.msgs = {'cp': PoseStamped(), 'js': JointState(name=self.names),
+                     'jaw': JointState(name=['jaw' if kind == 'PSM' else 'gripper']), 'cv': TwistStamped()}
+        self.msgs['cp'].header.frame_id = self.msgs['cv'].header.frame_id = name
         self.v2 = {}
         self.subs = []
         self.services = []
@@ -179,31 +188,39 @@ class ArmRos(object):
             if self.v2:
                 self.state_pub.publish(m)
 
-    def publish(self, q, jaw, stamp, with_aux=False):
-        """Measured = set-point (perfect tracking). ``with_aux``: also jacobians and wrenches."""
-        T, J = self.core.chain.fk(q, jacobian=True) if with_aux and self.v2 else (self.core.chain.fk(q), None)
-        cp = PoseStamped()
-        cp.header.stamp, cp.header.frame_id = stamp, self.core.name
+    def publish(self, q, jaw, stamp, with_aux=False, T=None):
+        """Measured = set-point (perfect tracking). ``T``: the tip pose of ``q`` when the caller has
+        it (else computed here). ``with_aux``: also jacobians and wrenches. The messages are
+        allocated once and refilled: rospy serialises them in publish()."""
+        J = None
+        if with_aux and self.v2 and _listened(self.v2['jacobian']):
+            T, J = self.core.chain.fk(q, jacobian=True)
+        elif T is None:
+            T = self.core.chain.fk(q)
+        cp, js = self.msgs['cp'], self.msgs['js']
+        cp.header.stamp = stamp
         fill_pose(cp.pose, T)
-        js = JointState(name=self.names, position=list(q))
         js.header.stamp = stamp
+        js.position = q.tolist() if hasattr(q, 'tolist') else list(q)
         self._send(('cp', 'sp_cp'), cp)
         self._send(('js', 'sp_js'), js)
         if jaw is not None and 'jaw' in self.v1:
-            jm = JointState(name=['jaw' if self.kind == 'PSM' else 'gripper'], position=list(jaw))
+            jm = self.msgs['jaw']
             jm.header.stamp = stamp
+            jm.position = jaw.tolist() if hasattr(jaw, 'tolist') else list(jaw)
             self._send(('jaw', 'sp_jaw'), jm)
         if self.v2:
-            cv = TwistStamped()
-            cv.header.stamp, cv.header.frame_id = stamp, self.core.name
-            if self.prev_cp is not None and stamp > self.prev_cp[0]:
+            cv = self.msgs['cv']
+            cv.header.stamp = stamp
+            v = (0.0,) * 6
+            if self.prev_cp is not None and stamp > self.prev_cp[0] and _listened(self.v2['cv']):
                 v = dvrk_kinematics.twist(self.prev_cp[1], T, (stamp - self.prev_cp[0]).to_sec())
-                (cv.twist.linear.x, cv.twist.linear.y, cv.twist.linear.z,
-                 cv.twist.angular.x, cv.twist.angular.y, cv.twist.angular.z) = v
+            (cv.twist.linear.x, cv.twist.linear.y, cv.twist.linear.z,
+             cv.twist.angular.x, cv.twist.angular.y, cv.twist.angular.z) = v
             self.prev_cp = (stamp, T)
             for p in self.v2['cv']:
                 p.publish(cv)
-            if J is not None:
+            if with_aux:
                 self._publish_aux(J, T, stamp)
         return T
 
@@ -215,14 +232,16 @@ class ArmRos(object):
                 p.publish(msg)
 
     def _publish_aux(self, J, T, stamp):
-        body = np.zeros_like(J)
-        Rt = T[:3, :3].T
-        body[:3], body[3:] = Rt @ J[:3], Rt @ J[3:]
-        for p, M in zip(self.v2['jacobian'], (J, body)):
-            m = Float64MultiArray(data=list(M.ravel()))
-            m.layout.dim = [MultiArrayDimension('rows', M.shape[0], M.size),
-                            MultiArrayDimension('cols', M.shape[1], M.shape[1])]
-            p.publish(m)
+        """Jacobians (``J`` None: nobody listens to them) and the (zero) wrenches."""
+        if J is not None:
+            body = np.zeros_like(J)
+            Rt = T[:3, :3].T
+            body[:3], body[3:] = Rt @ J[:3], Rt @ J[3:]
+            for p, M in zip(self.v2['jacobian'], (J, body)):
+                m = Float64MultiArray(data=list(M.ravel()))
+                m.layout.dim = [MultiArrayDimension('rows', M.shape[0], M.size),
+                                MultiArrayDimension('cols', M.shape[1], M.shape[1])]
+                p.publish(m)
         w = WrenchStamped()
         w.header.stamp, w.header.frame_id = stamp, self.core.name
         for p in self.v2['cf']:

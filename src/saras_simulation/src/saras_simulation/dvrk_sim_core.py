@@ -14,11 +14,36 @@ import math
 
 import numpy as np
 
+from saras_common import params as prm
 from saras_simulation import crtk_arm, dvrk_console, dvrk_kinematics, dvrk_motion
 
 MTM_JOINT_NAMES = dvrk_kinematics.MTM_JOINT_NAMES
 PEDALS = dvrk_console.PEDALS
 PSM_JAW_OPEN = 0.6      # [rad] jaw opening of the scripted surgeon (needle release)
+
+#: dvrk_sim's own parameters (config/dvrk_sim.yaml; saras_common.params spec); the psm / ecm /
+#: console / crtk_arms sections are validated by :class:`ConsoleSim`.
+NODE_PARAMS = {
+    'rate': (100.0, prm.in_range(1.0, 1000.0), 'Hz', 'publication rate of poses and joint states'),
+    'max_catch_up': (30, prm.in_range(1, 1000, integral=True), 'samples',
+                     'published at once after a late wake-up; older ones are skipped'),
+    'publish_queue_size': (0, prm.non_negative_integer, 'messages',
+                           'rospy publisher queue (0 = synchronous publish)'),
+    'bag': ('', prm.text, '', "rosbag to replay instead of the script ('' = scripted motion)"),
+    'loop': (True, prm.boolean, '', 'replay: restart at the end of the bag'),
+    'crtk': (False, prm.boolean, '', 'also serve the dVRK 2.x CRTK interface'),
+    'crtk_ns': ('/', prm.Rule('absolute namespace', lambda v: isinstance(v, str) and v.startswith('/')),
+                '', 'CRTK namespace'),
+    'crtk_aux_rate': (10.0, prm.non_negative, 'Hz', 'jacobians and wrenches (0 = every sample)'),
+    'publish_tf': (False, prm.boolean, '', 'arm tips and optical frames on /tf (standalone use)'),
+    'frames_file': ('', prm.text, '', "world_frames YAML of the arm bases ('' = none)"),
+    'publish_link_tf': (False, prm.boolean, '', "the arms' URDF joint TF"),
+    'link_tf_rate': (50.0, prm.non_negative, 'Hz', 'publish_link_tf rate (0 = every sample)'),
+    'robot_description_param': ('/{arm}/robot_description',
+                                prm.Rule("text containing '{arm}'",
+                                         lambda v: isinstance(v, str) and '{arm}' in v),
+                                '', 'URDF parameter of each arm for publish_link_tf'),
+}
 
 
 def _limits(kind):
