@@ -15,15 +15,14 @@ add_library(${PROJECT_NAME}_capture_core
   src/capture/capture_core.cpp
   src/capture/eye_capture.cpp)
 target_include_directories(${PROJECT_NAME}_capture_core PUBLIC include)
-target_include_directories(${PROJECT_NAME}_capture_core SYSTEM PUBLIC ${OpenCV_INCLUDE_DIRS})
-target_include_directories(${PROJECT_NAME}_capture_core SYSTEM PRIVATE ${GSTREAMER_INCLUDE_DIRS})
+target_include_directories(${PROJECT_NAME}_capture_core SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS} ${GSTREAMER_INCLUDE_DIRS})
 target_link_libraries(${PROJECT_NAME}_capture_core ${OpenCV_LIBRARIES} ${GSTREAMER_LIBRARIES} Threads::Threads)
 target_compile_options(${PROJECT_NAME}_capture_core PRIVATE -Wall -Wextra)
 
 add_library(${PROJECT_NAME}_capture_nodelet
   src/capture/capture_params.cpp
   src/capture/stereo_capture_nodelet.cpp)
-target_include_directories(${PROJECT_NAME}_capture_nodelet SYSTEM PRIVATE ${catkin_INCLUDE_DIRS})
+target_include_directories(${PROJECT_NAME}_capture_nodelet SYSTEM PRIVATE ${catkin_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
 target_link_libraries(${PROJECT_NAME}_capture_nodelet ${PROJECT_NAME}_capture_core ${catkin_LIBRARIES})
 target_compile_options(${PROJECT_NAME}_capture_nodelet PRIVATE -Wall -Wextra)
 add_dependencies(${PROJECT_NAME}_capture_nodelet ${catkin_EXPORTED_TARGETS})
@@ -43,6 +42,6 @@ if(CATKIN_ENABLE_TESTING)
     test/capture/test_capture_params.cpp
     test/capture/test_eye_capture.cpp
     src/capture/capture_params.cpp)
-  target_include_directories(${PROJECT_NAME}_capture_test SYSTEM PRIVATE ${catkin_INCLUDE_DIRS})
+  target_include_directories(${PROJECT_NAME}_capture_test SYSTEM PRIVATE ${catkin_INCLUDE_DIRS} ${OpenCV_INCLUDE_DIRS})
   target_link_libraries(${PROJECT_NAME}_capture_test ${PROJECT_NAME}_capture_core ${catkin_LIBRARIES})
 endif()

@@ -40,7 +40,8 @@ struct VideoSource
 extern const char* const kAppSink;
 
 /**
- * Resolve @p spec: "/dev/videoN" or "N" => V4L2 device N; a string containing '!' => GStreamer
+ * Resolve @p spec: "/dev/videoN" or "N" => V4L2 device N; "decklink:N" => decklinkPipeline(N)
+ * (Decklink input N, mode and connection auto-detected); a string containing '!' => GStreamer
  * pipeline (if its last element is not an appsink, " ! videoconvert ! <kAppSink>" is appended);
  * else a file or URL.
  * @throws std::invalid_argument for an empty or blank spec

@@ -59,6 +59,13 @@ VideoSource resolveSource(const std::string& spec)
     v.open_string = dev + std::to_string(v.device_index);
     return v;
   }
+  const std::string decklink = "decklink:";
+  if (s.compare(0, decklink.size(), decklink) == 0 && allDigits(s.substr(decklink.size())))
+  {
+    v.kind = SourceKind::GSTREAMER;
+    v.open_string = decklinkPipeline(std::stoi(s.substr(decklink.size())));
+    return v;
+  }
   if (s.find('!') != std::string::npos)
   {
     v.kind = SourceKind::GSTREAMER;

@@ -31,7 +31,7 @@ void readEye(const saras_common::Params& p, int e, CaptureConfig& c)
   catch (const std::invalid_argument&)
   {
     p.fail(eye + "_pipeline", "'" + c.pipeline[e] + "'", "",
-           "a V4L2 device (/dev/videoN), a GStreamer pipeline (elements joined by '!') or a video file");
+           "a V4L2 device (/dev/videoN), decklink:N, a GStreamer pipeline (elements joined by '!') or a video file");
   }
   c.camera_info_url[e] = p.text(eye + "_camera_info_url", "");
   const std::string& url = c.camera_info_url[e];

@@ -61,6 +61,10 @@ TEST(DecklinkPipeline, ProductionString)
   EXPECT_EQ(resolveSource(decklinkPipeline(1)).kind, SourceKind::GSTREAMER);
   EXPECT_EQ(resolveSource(decklinkPipeline(1)).open_string, decklinkPipeline(1));
   EXPECT_THROW(decklinkPipeline(-1), std::invalid_argument);
+  const VideoSource s = resolveSource("decklink:1");  // the launch files' short form
+  EXPECT_EQ(s.kind, SourceKind::GSTREAMER);
+  EXPECT_EQ(s.open_string, decklinkPipeline(1));
+  EXPECT_EQ(resolveSource("decklink:x").kind, SourceKind::FILE_OR_URL);
 }
 
 TEST(CaptureStamp, GrabMinusLatency)

@@ -22,7 +22,7 @@ saras_common::Params paramsOf(const Values& given, bool with_pipelines = true)
   if (with_pipelines)
   {
     values.emplace("left_pipeline", XmlRpc::XmlRpcValue("/dev/video0"));
-    values.emplace("right_pipeline", XmlRpc::XmlRpcValue("decklinkvideosrc device-number=1 ! videoconvert ! appsink"));
+    values.emplace("right_pipeline", XmlRpc::XmlRpcValue("decklink:1"));
   }
   return saras_common::Params(
       [values](const std::string& n, XmlRpc::XmlRpcValue& v) {
@@ -54,6 +54,7 @@ TEST(CaptureParams, DefaultsAndSources)
   const CaptureConfig c = readCaptureConfig(paramsOf({}));
   EXPECT_EQ(c.source[0].kind, SourceKind::V4L2_DEVICE);
   EXPECT_EQ(c.source[1].kind, SourceKind::GSTREAMER);
+  EXPECT_EQ(c.source[1].open_string, decklinkPipeline(1));
   EXPECT_EQ(c.frame_id[1], "endoscope/right_optical_frame");
   EXPECT_EQ(c.camera_name[0], "endoscope_left");
   EXPECT_DOUBLE_EQ(c.pair_tolerance, 0.010);
@@ -64,7 +65,7 @@ TEST(CaptureParams, DefaultsAndSources)
 TEST(CaptureParams, PipelinesAreRequired)
 {
   EXPECT_EQ(error({}, false), "parameter /endoscope/stereo_capture/left_pipeline = '' is invalid: must be a V4L2 "
-                              "device (/dev/videoN), a GStreamer pipeline (elements joined by '!') or a video file");
+                              "device (/dev/videoN), decklink:N, a GStreamer pipeline (elements joined by '!') or a video file");
 }
 
 TEST(CaptureParams, BadValuesNameTheRule)
