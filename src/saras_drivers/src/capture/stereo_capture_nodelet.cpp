@@ -103,11 +103,14 @@ public:
       ROS_INFO("%s: %s eye from '%s', calibration '%s'", name_.c_str(), kEyes[e], cfg_.source[e].open_string.c_str(),
                cfg_.camera_info_url[e].c_str());
     }
+    // last: diagnose() reads the eyes
+    timer_ = nh.createWallTimer(ros::WallDuration(cfg_.diagnostic_period),
+                                [this](const ros::WallTimerEvent&) { updater_->force_update(); });
   }
 
   ~StereoCapture()
   {
-    timer_.stop();
+    timer_.stop();  // waits for a running diagnose()
     for (auto& eye : eyes_)
       eye.reset();  // stops the thread; no frame arrives afterwards
   }
@@ -150,8 +153,6 @@ private:
       rates_[i].reset(new diagnostic_updater::FrequencyStatus(rate, names[i]));
       updater_->add(*rates_[i]);
     }
-    timer_ = nh.createWallTimer(ros::WallDuration(cfg_.diagnostic_period),
-                                [this](const ros::WallTimerEvent&) { updater_->force_update(); });
   }
 
   /// An eye thread's frame: stamp, pair, publish a completed pair (on that thread).

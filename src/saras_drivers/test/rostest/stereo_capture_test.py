@@ -5,7 +5,8 @@ capture (test/stereo_capture.test): two live 30 fps videotestsrc pipelines. Both
   image_raw at >= 50 % of 30 Hz (measured from arrival counts over DURATION s; a busy 2-core host
   may slow the sources, it never speeds them up: <= 150 %); every left stamp is also a right stamp
   (pairs share one stamp; >= 90 % of the left frames, the first and last may be cut); camera_info
-  equals the calibration YAML (size, D, K, R, P, frame) and carries the images' stamps; /diagnostics has the node's "capture"
+  equals the calibration YAML (size, D, K, R, P, frame) and carries the images' stamps;
+  image_raw/compressed (the recorded stream) carries the same frames; /diagnostics has the node's "capture"
   status at OK with hardware_id endoscope, and its rate statuses.
 broken (test/stereo_capture_broken.test): the left pipeline names a missing element. The node stays
   up: /diagnostics reports ERROR "left camera not open" naming the element, repeatedly over
@@ -90,6 +91,7 @@ class StereoCaptureTest(unittest.TestCase):
     def setUp(self):
         self.images = {e: Recorder('/endoscope/%s/image_raw' % e) for e in EYES}
         self.infos = {e: Recorder('/endoscope/%s/camera_info' % e, CameraInfo) for e in EYES}
+        self.jpeg = Recorder('/endoscope/left/image_raw/compressed')
         self.diagnostics = Diagnostics()
 
     def test_scenario(self):
@@ -108,14 +110,20 @@ class StereoCaptureTest(unittest.TestCase):
             arrivals, _, _ = self.images[e].snapshot()
             n = len(arrivals) - start[e]
             rate = n / DURATION
+            rospy.loginfo('%s image_raw: %d frames in %.1f s = %.1f Hz', e, n, DURATION, rate)
             self.assertGreaterEqual(rate, 0.5 * RATE, '%s image_raw at %.1f Hz' % (e, rate))
             self.assertLessEqual(rate, 1.5 * RATE, '%s image_raw at %.1f Hz' % (e, rate))
         left = set(self.images['left'].snapshot()[1])
         right = set(self.images['right'].snapshot()[1])
         common = left & right
+        rospy.loginfo('pairs: %d left stamps, %d right stamps, %d common', len(left), len(right), len(common))
         self.assertGreaterEqual(len(common), 0.9 * len(left) - 2,
                                 '%d of %d left stamps are right stamps' % (len(common), len(left)))
         self.check_camera_info()
+        # the recorded stream: image_transport's compressed plugin if installed, else the node's own
+        jpeg = set(self.jpeg.snapshot()[1])
+        self.assertGreater(len(jpeg), 10, 'left image_raw/compressed: %d messages' % len(jpeg))
+        self.assertGreaterEqual(len(jpeg & left), 0.9 * len(jpeg) - 2, 'compressed stamps are not the images\'')
         self.assertTrue(wait_until(lambda: any(st.level == DiagnosticStatus.OK
                                                for st, _ in self.diagnostics.get('capture')), 20.0),
                         'no OK capture status: %s' % [st.message for st, _ in self.diagnostics.get('capture')])
