@@ -93,6 +93,18 @@ def test_sim_false_starts_no_simulator_and_switches_are_honoured():
     assert {n.namespace.rstrip('/') for n in sides} >= {'/mesa_left', '/mesa_right'}
 
 
+def test_sim_false_captures_the_endoscope_from_the_given_pipelines():
+    """With the real hardware the endoscope comes from the capture nodelet (saras_drivers StereoCapture)
+    in the visual feedback manager, fed by the pipelines given to platform.launch; never in simulation."""
+    nodes = _launch_nodes(['sim:=false', 'rviz:=false', 'record:=false',
+                           'endoscope_left_pipeline:=videotestsrc ! appsink',
+                           'endoscope_right_pipeline:=/dev/video1'])
+    cap = [n for n in nodes if n.namespace == '/endoscope/' and n.name == 'stereo_capture']
+    assert cap, [(n.namespace, n.name) for n in nodes]
+    assert 'saras_drivers/StereoCapture' in cap[0].args and '/visual_feedback_manager' in cap[0].args
+    assert not [n for n in _launch_nodes([]) if n.name == 'stereo_capture']
+
+
 def test_node_graph_lists_every_node_of_platform_launch():
     """docs/node_graph.md (captured from the running platform) and the README diagram are in sync
     with the launch files: every node started in simulation (no rviz, no recorder) appears."""
