@@ -105,6 +105,33 @@ def test_clip_and_max_velocity_validation(model):
         SarasArmModel(model.kin, min_rate=100.0)
 
 
+def test_jaw_moves_at_its_own_speed_independently_of_the_arm(model):
+    jaw_v = model.jaw_velocity
+    model.set_clip(jaw=model.lower[5])
+    while model.moving:
+        model.step(0.01)
+    rng = np.random.RandomState(11)
+    q, t = _reachable(model, rng)
+    model.set_max_velocity(0.2)
+    model.set_target(t[:3, 3])
+    model.set_clip(jaw=model.upper[5])                 # open fully while the arm moves slowly
+    arm_alone = SarasArmModel(model.kin, max_velocity=0.2, insertion_ratio=0.05, initial_joints=model.q.copy())
+    arm_alone.set_target(t[:3, 3])
+    jaw_prev, steps = model.q[5], 0
+    while model.moving and steps < 100000:
+        model.step(0.003)
+        arm_alone.step(0.003)
+        assert model.q[5] - jaw_prev <= jaw_v * 0.003 * (1 + 1e-9)
+        assert np.array_equal(model.q[:5], arm_alone.q[:5])   # the jaw neither slows nor waits for the arm
+        jaw_prev = model.q[5]
+        steps += 1
+        if steps * 0.003 >= (model.upper[5] - model.lower[5]) / jaw_v + 0.01:
+            assert model.q[5] == model.upper[5]        # the jaw arrived on its own schedule
+    assert np.array_equal(model.q, model.target)
+    with pytest.raises(ValueError):
+        SarasArmModel(model.kin, jaw_velocity=0.0)
+
+
 def test_quaternion_matrix_round_trip():
     rng = np.random.RandomState(1)
     for _ in range(50):

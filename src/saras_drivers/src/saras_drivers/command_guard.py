@@ -87,3 +87,48 @@ class CommandGuard(object):
 
 def _dist(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+JAW_REASONS = ('invalid', 'zero_stamp', 'future_stamp', 'stale')
+
+
+class JawGuard(object):
+    """Checks of the jaw commands (``jaw_target``, one joint) the driver forwards as ``set_clip``.
+
+    A command is forwarded only if it names exactly ``joint`` with one finite position [rad] and its
+    stamp is neither zero, nor in the future beyond ``max_future``, nor older than ``max_age`` [s];
+    a command equal to the last one forwarded is not sent again (the teleoperation republishes a held
+    jaw). :meth:`reset` on every (re)connection: the robot holds then, so the next command is sent.
+    The jaw range is the robot's to enforce (``workspace`` error, counted by the driver).
+    """
+
+    def __init__(self, joint, max_age=0.1, max_future=0.02):
+        if not (isinstance(max_age, (int, float)) and math.isfinite(max_age) and max_age > 0):
+            raise ValueError('max_target_age must be a positive finite number [s]')
+        self.joint, self.max_age, self.max_future = joint, float(max_age), float(max_future)
+        self.last = None
+        self.rejected = dict.fromkeys(JAW_REASONS, 0)
+
+    def check(self, names, positions, age):
+        """-> (jaw [rad] to send or None, rejection reason or None). ``age`` [s]: now - stamp, None
+        for a zero stamp. (None, None): valid but unchanged."""
+        why = None
+        if list(names) != [self.joint] or len(positions) != 1 or not math.isfinite(positions[0]):
+            why = 'invalid'
+        elif age is None:
+            why = 'zero_stamp'
+        elif age < -self.max_future:
+            why = 'future_stamp'
+        elif age > self.max_age:
+            why = 'stale'
+        if why:
+            self.rejected[why] += 1
+            return None, why
+        jaw = float(positions[0])
+        return (None, None) if jaw == self.last else (jaw, None)
+
+    def sent(self, jaw):
+        self.last = jaw
+
+    def reset(self):
+        self.last = None
