@@ -141,10 +141,10 @@ TEST(ClipMapper, NonFiniteClipIsRejectedAndHolds)
   m.step(std::nan(""), false);
   EXPECT_DOUBLE_EQ(m.command(), 0.5);
   EXPECT_TRUE(std::isfinite(m.command()));
-  // the next valid sample resumes (rate-limited)
+  // the next valid sample resumes, rate-limited over the 101 ms since the last step (t + 0.299)
   t = drive(m, 1.0, t + 0.3, 0.1);
   EXPECT_FALSE(m.holding());
-  EXPECT_NEAR(m.command(), 0.7, 1e-9);
+  EXPECT_NEAR(m.command(), 0.5 + 2.0 * 0.101, 1e-9);
 }
 
 TEST(ClipMapper, InvalidParametersAreNamed)
