@@ -1,10 +1,11 @@
 """Demo report: plots and an index.html from a platform recording.
 
 ``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
-master vs slave trajectory per channel, the instrument jaw following the Simball clip, tool distances with the thresholds, tank energies, contact
-forces, the augmented endoscope frame and rviz screenshot (files produced live by the demo and
-passed in ``extras``), and the table of recorded topics. A plot whose topics are absent from the
-bag is listed as "not recorded" instead of silently disappearing.
+master vs slave trajectory per channel, the instrument jaw following the Simball clip, tool
+distances with the thresholds, tank energies, contact forces, the augmented endoscope frame and rviz
+screenshot (files produced live by the demo and passed in ``extras``), and the table of recorded
+topics. A plot whose topics are absent from the bag is listed as "not recorded" instead of silently
+disappearing.
 """
 import html
 import os

@@ -1,13 +1,13 @@
 """Endoscope Robot + SARAS Adapter model (ROS-agnostic), used by ``saras_arm_sim``.
 
-Six motors: the Endoscope Robot's yaw, pitch (pivoting about the RCM), insertion and roll, and
-the SARAS Adapter's instrument roll and jaw. The passive Positioning Arm is fixed during
-operation (its setup pose places the RCM). Joint motion is velocity-limited and synchronised:
-every step, the five positioning joints advance toward their target along a straight line in joint
-space at the largest speed for which no motor exceeds its limit (revolute motors: ``max_velocity``
-[rad/s]; insertion: ``max_velocity * insertion_ratio`` [m/s]). The jaw moves on its own toward its
-target at ``jaw_velocity`` [rad/s] (opening the clip neither slows nor waits for the arm's motion). Integration sub-steps are at most
-``1 / min_rate`` seconds (default 500 Hz).
+Six motors: the Endoscope Robot's yaw, pitch (pivoting about the RCM), insertion and roll, and the
+SARAS Adapter's instrument roll and jaw. The passive Positioning Arm is fixed during operation (its
+setup pose places the RCM). Joint motion is velocity-limited and synchronised: every step, the five
+positioning joints advance toward their target along a straight line in joint space at the largest
+speed for which no motor exceeds its limit (revolute motors: ``max_velocity`` [rad/s]; insertion:
+``max_velocity * insertion_ratio`` [m/s]). The jaw moves on its own toward its target at
+``jaw_velocity`` [rad/s] (opening the clip neither slows nor waits for the arm's motion).
+Integration sub-steps are at most ``1 / min_rate`` seconds (default 500 Hz).
 
 Targets are validated before anything changes: a rejected target causes no motion.
 """
