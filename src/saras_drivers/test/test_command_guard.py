@@ -1,7 +1,7 @@
-"""CommandGuard: the SARAS arm driver's own target checks (no ROS)."""
+"""CommandGuard and JawGuard: the SARAS arm driver's own target and jaw checks (no ROS)."""
 import pytest
 
-from saras_drivers.command_guard import CommandGuard
+from saras_drivers.command_guard import CommandGuard, JawGuard
 
 
 def guard(**kw):
@@ -77,3 +77,30 @@ def test_gap_and_reset_resynchronise_on_the_measured_pose():
 def test_invalid_parameters(kw):
     with pytest.raises(ValueError):
         guard(**kw)
+
+
+def test_jaw_guard_forwards_changed_commands_and_a_held_one_periodically():
+    g = JawGuard('mesa_left/jaw', max_age=0.1, resend_period=0.25)
+    assert g.check(['mesa_left/jaw'], [0.3], 0.01, 10.0) == (0.3, None)
+    g.sent(0.3, 10.0)
+    assert g.check(['mesa_left/jaw'], [0.3], 0.01, 10.1) == (None, None)   # held: not re-sent yet
+    assert g.check(['mesa_left/jaw'], [0.3], 0.01, 10.3) == (0.3, None)    # ... but after resend_period
+    assert g.check(['mesa_left/jaw'], [0.31], 0.01, 10.1) == (0.31, None)
+    g.sent(0.31, 10.1)
+    g.reset()                                                               # reconnection: send again
+    assert g.check(['mesa_left/jaw'], [0.31], 0.01, 10.11) == (0.31, None)
+
+
+def test_jaw_guard_rejects_bad_commands_with_a_reason():
+    g = JawGuard('mesa_left/jaw', max_age=0.1)
+    assert g.check(['mesa_right/jaw'], [0.3], 0.0, 1.0) == (None, 'invalid')
+    assert g.check(['mesa_left/jaw', 'x'], [0.3, 0.1], 0.0, 1.0) == (None, 'invalid')
+    assert g.check(['mesa_left/jaw'], [float('nan')], 0.0, 1.0) == (None, 'invalid')
+    assert g.check(['mesa_left/jaw'], [float('inf')], 0.0, 1.0) == (None, 'invalid')
+    assert g.check(['mesa_left/jaw'], [0.3], None, 1.0) == (None, 'zero_stamp')
+    assert g.check(['mesa_left/jaw'], [0.3], -1.0, 1.0) == (None, 'future_stamp')
+    assert g.check(['mesa_left/jaw'], [0.3], 0.5, 1.0) == (None, 'stale')
+    assert g.rejected == {'invalid': 4, 'zero_stamp': 1, 'future_stamp': 1, 'stale': 1}
+    for bad in (dict(max_age=0.0), dict(resend_period=float('nan'))):
+        with pytest.raises(ValueError):
+            JawGuard('mesa_left/jaw', **bad)

@@ -24,6 +24,10 @@ def test_bad_set_target(payload):
 
 def test_clip_and_velocity():
     assert proto.parse_set_clip(proto.make_set_clip(1, float('nan'), 0.3)) == (1, None, 0.3)
+    timed = proto.make_set_clip(3, 0.2, t=12.5)
+    assert proto.parse_set_clip(timed) == (3, 0.2, None) and proto.target_time(timed) == 12.5
+    with pytest.raises(proto.ProtocolError):
+        proto.parse_set_clip({'id': 1, 'jaw': 0.2, 'roll': None, 'time': float('nan')})
     assert proto.parse_set_max_velocity(proto.make_set_max_velocity(2, 0.7)) == (2, 0.7)
     with pytest.raises(proto.ProtocolError):
         proto.parse_set_max_velocity({'id': 1, 'max_velocity': float('inf')})

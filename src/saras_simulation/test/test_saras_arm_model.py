@@ -91,6 +91,32 @@ def test_orientation_axis_check_and_roll(model):
     assert e.value.code == proto.RCM_VIOLATION
 
 
+def test_roll_about_the_shaft_follows_the_target_orientation(model):
+    """The Simball handle's rotation reaches the arm as the target_pose orientation; the arm realises
+    its component about the instrument shaft (tool z) as roll and ignores the rest (the shaft
+    direction is set by the RCM)."""
+    rng = np.random.RandomState(13)
+    q, t = _reachable(model, rng)
+    model.set_target(t[:3, 3], matrix_to_quat(t[:3, :3]))
+    while model.moving:
+        model.step(0.01)
+    r0 = model.tip_in_base()[:3, :3]
+
+    def rot(axis, a):
+        c, s = math.cos(a), math.sin(a)
+        return {'z': np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]]),
+                'x': np.array([[1.0, 0, 0], [0, c, -s], [0, s, c]])}[axis]
+    for desired, expect in ((r0.dot(rot('z', 0.3)), 0.3),                       # pure roll
+                            (r0.dot(rot('z', -0.2)).dot(rot('x', 0.1)), -0.2)):  # roll + tilt: tilt ignored
+        model.set_target(t[:3, 3], matrix_to_quat(desired))
+        while model.moving:
+            model.step(0.01)
+        r = model.tip_in_base()[:3, :3]
+        assert np.allclose(r[:, 2], r0[:, 2], atol=1e-9)               # shaft unchanged
+        rel = r0.T.dot(r)
+        assert math.atan2(rel[1, 0], rel[0, 0]) == pytest.approx(expect, abs=0.01)
+
+
 def test_clip_and_max_velocity_validation(model):
     model.set_clip(jaw=0.5, roll=None)
     assert model.target[5] == 0.5
@@ -103,6 +129,33 @@ def test_clip_and_max_velocity_validation(model):
         assert e.value.code == proto.BAD_VALUE
     with pytest.raises(ValueError):
         SarasArmModel(model.kin, min_rate=100.0)
+
+
+def test_jaw_moves_at_its_own_speed_independently_of_the_arm(model):
+    jaw_v = model.jaw_velocity
+    model.set_clip(jaw=model.lower[5])
+    while model.moving:
+        model.step(0.01)
+    rng = np.random.RandomState(11)
+    q, t = _reachable(model, rng)
+    model.set_max_velocity(0.2)
+    model.set_target(t[:3, 3])
+    model.set_clip(jaw=model.upper[5])                 # open fully while the arm moves slowly
+    arm_alone = SarasArmModel(model.kin, max_velocity=0.2, insertion_ratio=0.05, initial_joints=model.q.copy())
+    arm_alone.set_target(t[:3, 3])
+    jaw_prev, steps = model.q[5], 0
+    while model.moving and steps < 100000:
+        model.step(0.003)
+        arm_alone.step(0.003)
+        assert model.q[5] - jaw_prev <= jaw_v * 0.003 * (1 + 1e-9)
+        assert np.array_equal(model.q[:5], arm_alone.q[:5])   # the jaw neither slows nor waits for the arm
+        jaw_prev = model.q[5]
+        steps += 1
+        if steps * 0.003 >= (model.upper[5] - model.lower[5]) / jaw_v + 0.01:
+            assert model.q[5] == model.upper[5]        # the jaw arrived on its own schedule
+    assert np.array_equal(model.q, model.target)
+    with pytest.raises(ValueError):
+        SarasArmModel(model.kin, jaw_velocity=0.0)
 
 
 def test_quaternion_matrix_round_trip():

@@ -228,6 +228,18 @@ def test_stale_set_point_is_counted_and_not_executed():
         while server.accepted < 1 and time.monotonic() < deadline:
             time.sleep(0.02)
         assert server.accepted >= 1 and server.stale_targets == 1
+        # the same for the jaw (set_clip with a time): an old jaw command is not executed, a fresh one is
+        jaw0 = model.target[5]
+        commander.emit(proto.EV_SET_CLIP, proto.make_set_clip(commander.next_id(), jaw0 + 0.3, t=time.time() - 1.0))
+        deadline = time.monotonic() + 5.0
+        while server.stale_targets < 2 and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert server.stale_targets == 2 and model.target[5] == jaw0
+        commander.emit(proto.EV_SET_CLIP, proto.make_set_clip(commander.next_id(), jaw0 + 0.3, t=time.time()))
+        deadline = time.monotonic() + 5.0
+        while model.target[5] == jaw0 and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert model.target[5] == pytest.approx(jaw0 + 0.3)
     finally:
         commander.stop()
         server.stop()

@@ -1,10 +1,11 @@
 """Demo report: plots and an index.html from a platform recording.
 
 ``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
-master vs slave trajectory per channel, tool distances with the thresholds, tank energies, contact
-forces, the augmented endoscope frame and rviz screenshot (files produced live by the demo and
-passed in ``extras``), and the table of recorded topics. A plot whose topics are absent from the
-bag is listed as "not recorded" instead of silently disappearing.
+master vs slave trajectory per channel, the instrument jaw following the Simball clip, tool
+distances with the thresholds, tank energies, contact forces, the augmented endoscope frame and rviz
+screenshot (files produced live by the demo and passed in ``extras``), and the table of recorded
+topics. A plot whose topics are absent from the bag is listed as "not recorded" instead of silently
+disappearing.
 """
 import html
 import os
@@ -220,6 +221,37 @@ def plot_forces(data, t0):
     return fig
 
 
+def _jaw(series, joint):
+    """(t, jaw [rad]) of ``joint`` in a JointState series."""
+    pts = [(t, m.position[m.name.index(joint)]) for t, m in series
+           if joint in m.name and m.name.index(joint) < len(m.position)]
+    return np.array([p[0] for p in pts]), np.array([p[1] for p in pts])
+
+
+def plot_jaw(data, t0):
+    """Simball clip angle, commanded jaw (jaw_target) and measured jaw (joint_states) per arm."""
+    if not any(data.get('/mesa_%s/jaw_target' % s) or data.get('/mesa_%s/joint_states' % s) for s in SIDES):
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.2), sharey=True)
+    for ax, side in zip(axes, SIDES):
+        clip = data.get('/touchball/%s/state' % side, [])
+        if clip:
+            ax.plot(np.array([c[0] for c in clip]) - t0, [m.clip_angle for _, m in clip],
+                    color='gray', lw=0.8, label='Simball clip angle')
+        for topic, label, style in (('/mesa_%s/jaw_target' % side, 'commanded (jaw_target)', '--'),
+                                    ('/mesa_%s/joint_states' % side, 'measured (joint_states)', '-')):
+            t, v = _jaw(data.get(topic, []), 'mesa_%s/jaw' % side)
+            if len(t):
+                ax.plot(t - t0, v, style, lw=1.2, label=label)
+        ax.set_title('mesa_%s' % side)
+        ax.set_xlabel('time [s]')
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel('angle [rad]')
+    fig.suptitle('Instrument jaw following the Simball clip')
+    return fig
+
+
 def plot_contact_depths(data, t0):
     """Estimated (ContactEstimator, /mesa_<s>/contact_estimate) vs true (contact_sim) depth per tool."""
     if not any(data.get('/mesa_%s/contact_truth' % s) or data.get('/mesa_%s/contact_estimate' % s) for s in SIDES):
@@ -306,6 +338,8 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     topics += ['/collision/distances', '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
     topics += ['/dvrk/MTMR/position_cartesian_current', '/dvrk/PSM1/position_cartesian_current']
     topics += list(PEDAL_TOPICS.values())
+    topics += ['/mesa_%s/jaw_target' % s for s in SIDES] + ['/mesa_%s/joint_states' % s for s in SIDES]
+    topics += ['/touchball/%s/state' % s for s in SIDES]
     with rosbag.Bag(bag_path) as bag:
         t0 = bag.get_start_time()
         data = read_series(bag, topics)
@@ -319,6 +353,9 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
                lambda: plot_console(data, t0),
                '/dvrk/MTMR and /dvrk/PSM1 position_cartesian_current; shaded: /dvrk/footpedals/* pressed '
                '(clutch: PSM holds while the hand re-centres)')
+    rep.figure('jaw.png', 'Instrument jaw (Simball clip)', lambda: plot_jaw(data, t0),
+               '/touchball/<side>/state clip_angle, /mesa_<side>/jaw_target (scaled, clamped, rate-limited) '
+               'and the measured jaw of /mesa_<side>/joint_states')
     rep.figure('distances.png', 'Tool distances', lambda: plot_distances(data, thresholds, t0),
                '/collision/distances with the collision (red) and warning (orange) thresholds')
     occ = colour_occupancy(data.get('/collision/distances', []), thresholds)

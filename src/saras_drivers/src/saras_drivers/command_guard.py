@@ -87,3 +87,55 @@ class CommandGuard(object):
 
 def _dist(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+JAW_REASONS = ('invalid', 'zero_stamp', 'future_stamp', 'stale')
+
+
+class JawGuard(object):
+    """Checks of the jaw commands (``jaw_target``, one joint) the driver forwards as ``set_clip``.
+
+    A command is forwarded only if it names exactly ``joint`` with one finite position [rad] and its
+    stamp is neither zero, nor in the future beyond ``max_future``, nor older than ``max_age`` [s];
+    a command equal to the last one forwarded is sent again only ``resend_period`` [s] after it (the
+    teleoperation republishes a held jaw at its rate; a robot that dropped the last one as stale
+    still gets it). :meth:`reset` on every (re)connection: the robot holds then, so the next command
+    is sent. Times ``now`` are monotonic seconds.
+    The jaw range is the robot's to enforce (``workspace`` error, counted by the driver).
+    """
+
+    def __init__(self, joint, max_age=0.1, max_future=0.02, resend_period=0.25):
+        for name, v in (('max_target_age', max_age), ('jaw_resend_period', resend_period)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError('%s must be a positive finite number [s]' % name)
+        self.joint, self.max_age, self.max_future = joint, float(max_age), float(max_future)
+        self.resend_period = float(resend_period)
+        self.last = None
+        self.last_time = -math.inf
+        self.rejected = dict.fromkeys(JAW_REASONS, 0)
+
+    def check(self, names, positions, age, now):
+        """-> (jaw [rad] to send or None, rejection reason or None). ``age`` [s]: now - stamp, None
+        for a zero stamp. (None, None): valid but unchanged (sent less than resend_period ago)."""
+        why = None
+        if list(names) != [self.joint] or len(positions) != 1 or not math.isfinite(positions[0]):
+            why = 'invalid'
+        elif age is None:
+            why = 'zero_stamp'
+        elif age < -self.max_future:
+            why = 'future_stamp'
+        elif age > self.max_age:
+            why = 'stale'
+        if why:
+            self.rejected[why] += 1
+            return None, why
+        jaw = float(positions[0])
+        if jaw == self.last and now - self.last_time < self.resend_period:
+            return None, None
+        return jaw, None
+
+    def sent(self, jaw, now):
+        self.last, self.last_time = jaw, now
+
+    def reset(self):
+        self.last = None

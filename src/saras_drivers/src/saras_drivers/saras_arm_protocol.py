@@ -17,7 +17,8 @@ Client -> server events (the server answers every one with a Socket.IO acknowled
                      ``max_target_age`` drops targets older than that, counted, no answer)
 ``set_max_velocity`` ``{"id": int, "max_velocity": float}``      [rad/s]; insertion moves at
                      max_velocity * insertion_ratio [m/s] (ratio published in ``info``)
-``set_clip``         ``{"id": int, "jaw": float | null, "roll": float | null}``   [rad], null = keep
+``set_clip``         ``{"id": int, "jaw": float | null, "roll": float | null, "time": float}``   [rad],
+                     null = keep; ``time`` optional, as for ``set_target``
 ``hold``             ``{"id": int}``  stop: target := current joints
 ``subscribe_state``  ``{"window": int}`` (optional) join the ``state`` stream (the ack carries
                      ``info``); with ``window`` >= 1 the server keeps at most that many states
@@ -65,7 +66,7 @@ CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE, NOT_COMMAN
 MAX_MESSAGE_BYTES = 4096
 #: Fields each client event may carry (anything else: bad_payload).
 FIELDS = {'set_target': {'id', 'position', 'orientation', 'time'},
-          'set_max_velocity': {'id', 'max_velocity'}, 'set_clip': {'id', 'jaw', 'roll'},
+          'set_max_velocity': {'id', 'max_velocity'}, 'set_clip': {'id', 'jaw', 'roll', 'time'},
           'hold': {'id'}, 'subscribe_state': {'window'}, 'state_ack': {'received'}}
 
 
@@ -140,7 +141,7 @@ def make_set_target(cmd_id, position, orientation=None, t=None):
 
 
 def target_time(payload):
-    """The optional ``time`` of a ``set_target`` [s, sender wall clock], or None."""
+    """The optional ``time`` of a ``set_target`` or ``set_clip`` [s, sender wall clock], or None."""
     return _scalar(_dict(payload), 'time', optional=True)
 
 
@@ -168,14 +169,18 @@ def parse_set_max_velocity(payload):
     return _id(p), _scalar(p, 'max_velocity')
 
 
-def make_set_clip(cmd_id, jaw=None, roll=None):
+def make_set_clip(cmd_id, jaw=None, roll=None, t=None):
     nan_to_none = lambda v: None if v is None or (isinstance(v, float) and math.isnan(v)) else float(v)
-    return {'id': int(cmd_id), 'jaw': nan_to_none(jaw), 'roll': nan_to_none(roll)}
+    d = {'id': int(cmd_id), 'jaw': nan_to_none(jaw), 'roll': nan_to_none(roll)}
+    if t is not None:
+        d['time'] = float(t)
+    return d
 
 
 def parse_set_clip(payload):
     """-> (id, jaw or None, roll or None)."""
     p = _known(_dict(payload), EV_SET_CLIP)
+    _scalar(p, 'time', optional=True)          # validated here; read with target_time()
     return _id(p), _scalar(p, 'jaw', optional=True), _scalar(p, 'roll', optional=True)
 
 

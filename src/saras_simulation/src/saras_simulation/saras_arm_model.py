@@ -1,12 +1,13 @@
 """Endoscope Robot + SARAS Adapter model (ROS-agnostic), used by ``saras_arm_sim``.
 
-Six motors: the Endoscope Robot's yaw, pitch (pivoting about the RCM), insertion and roll, and
-the SARAS Adapter's instrument roll and jaw. The passive Positioning Arm is fixed during
-operation (its setup pose places the RCM). Joint motion is velocity-limited and synchronised:
-every step, all joints advance toward their target along a straight line in joint space at the
-largest speed for which no motor exceeds its limit (revolute motors: ``max_velocity`` [rad/s];
-insertion: ``max_velocity * insertion_ratio`` [m/s]). Integration sub-steps are at most
-``1 / min_rate`` seconds (default 500 Hz).
+Six motors: the Endoscope Robot's yaw, pitch (pivoting about the RCM), insertion and roll, and the
+SARAS Adapter's instrument roll and jaw. The passive Positioning Arm is fixed during operation (its
+setup pose places the RCM). Joint motion is velocity-limited and synchronised: every step, the five
+positioning joints advance toward their target along a straight line in joint space at the largest
+speed for which no motor exceeds its limit (revolute motors: ``max_velocity`` [rad/s]; insertion:
+``max_velocity * insertion_ratio`` [m/s]). The jaw moves on its own toward its target at
+``jaw_velocity`` [rad/s] (opening the clip neither slows nor waits for the arm's motion).
+Integration sub-steps are at most ``1 / min_rate`` seconds (default 500 Hz).
 
 Targets are validated before anything changes: a rejected target causes no motion.
 """
@@ -67,15 +68,19 @@ class SarasArmModel(object):
     :param min_rate: minimum internal integration rate [Hz].
     :param min_depth: the tip must be at least this far [m] inside the trocar (along the
         neutral shaft axis); closer or outside => ``rcm_violation``.
+    :param jaw_velocity: jaw speed limit [rad/s] (independent of ``max_velocity``).
     """
 
     def __init__(self, kin, max_velocity=1.0, max_velocity_limit=3.0, insertion_ratio=0.05,
                  rcm_axis_tolerance=math.pi / 2, position_tolerance=1e-6, min_rate=500.0,
-                 min_depth=0.01, initial_joints=None):
+                 min_depth=0.01, initial_joints=None, jaw_velocity=2.0):
         if not 0.0 < max_velocity <= max_velocity_limit:
             raise ValueError('max_velocity must be in (0, max_velocity_limit], got %r' % max_velocity)
         if not insertion_ratio > 0.0:
             raise ValueError('insertion_ratio must be > 0 m/rad')
+        if not (math.isfinite(jaw_velocity) and jaw_velocity > 0.0):
+            raise ValueError('jaw_velocity must be > 0 rad/s')
+        self.jaw_velocity = float(jaw_velocity)
         if not min_rate >= 500.0:
             raise ValueError('min_rate must be >= 500 Hz')
         self.kin = kin
@@ -113,6 +118,7 @@ class SarasArmModel(object):
     def _update_speed(self):
         self._speed[:] = self.max_velocity
         self._speed[IDX_INSERTION] = self.max_velocity * self.insertion_ratio
+        self._speed[IDX_JAW] = self.jaw_velocity
 
     def set_max_velocity(self, v):
         if not (math.isfinite(v) and 0.0 < v <= self.max_velocity_limit):
@@ -191,11 +197,16 @@ class SarasArmModel(object):
         self.time += dt
         if not self.moving:            # at the target: nothing to integrate (idle fast path)
             return False
+        jaw_err = self.target[IDX_JAW] - self.q[IDX_JAW]
+        jaw_step = self.jaw_velocity * dt
+        self.q[IDX_JAW] = self.target[IDX_JAW] if abs(jaw_err) <= jaw_step else \
+            self.q[IDX_JAW] + math.copysign(jaw_step, jaw_err)
         n = max(1, int(math.ceil(dt / self.max_step - 1e-9)))
         h = dt / n
         # plain floats: numpy's per-call overhead on 6-vectors was most of this loop's cost (the
-        # simulator calls it for every state sample and command); same operations, same rounding
-        q, target, speed = self.q.tolist(), self.target.tolist(), self._speed.tolist()
+        # simulator calls it for every state sample and command); same operations, same rounding.
+        # The synchronised group: every joint but the jaw.
+        q, target, speed = (v.tolist()[:IDX_JAW] for v in (self.q, self.target, self._speed))
         for _ in range(n):
             err = [t - x for t, x in zip(target, q)]
             scale = max(abs(e) / (v * h) for e, v in zip(err, speed))
@@ -203,7 +214,7 @@ class SarasArmModel(object):
                 q = target
                 break                  # reached: the remaining sub-steps would not move
             q = [x + e / scale for x, e in zip(q, err)]
-        self.q[:] = q
+        self.q[:IDX_JAW] = q
         return self.moving
 
     @property

@@ -173,13 +173,13 @@ class SarasArmServer(object):
             return proto.reply(False, refusal, 'refused', 0)
         # first the state samples a late loop still owes (so they are not overtaken by the
         # command), then the command acts now: no await between advance() and fn()
-        if event == 'set_target' and self._stale(payload):
+        if event in ('set_target', 'set_clip') and self._stale(payload):
             # a set-point that waited in our input longer than the limit is not executed (a
             # simulator starved of CPU would otherwise replay seconds-old motion), and costs
             # almost nothing, so that a backlog drains; counted, no error event: the client
             # cannot act on it and it would add load
             self.stale_targets += 1
-            return proto.reply(False, proto.STALE, 'target older than %.3f s' % self.max_target_age, cmd_id)
+            return proto.reply(False, proto.STALE, '%s older than %.3f s' % (event, self.max_target_age), cmd_id)
         now = await self._sample_until()
         try:
             self.advance(now)           # (a no-op if the loop already sampled past now)
@@ -201,7 +201,7 @@ class SarasArmServer(object):
         return r
 
     def _stale(self, payload):
-        """True for a set_target older than max_target_age (sender time vs our wall clock)."""
+        """True for a set_target / set_clip older than max_target_age (sender time vs our wall clock)."""
         if self.max_target_age <= 0.0:
             return False
         try:

@@ -23,6 +23,10 @@
  * with the link up (start-up) these are plain holds, not faults. Collision monitoring
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
+ *
+ * Instrument jaw (JawChannel, jaw_channel.h): the Simball clip angle of device_state -> jaw_target
+ * (sensor_msgs/JointState, scaled, clamped to the jaw range, rate-limited), held whenever the
+ * set-point is not commanding (FAULT, CLUTCHED, WAITING) or holds (link stale, no twist).
  */
 #include <string>
 
@@ -35,6 +39,7 @@
 #include <saras_msgs/HapticDeviceState.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include "jaw_channel.h"
 #include "node_common.h"
 #include "saras_common/message_pool.h"
 #include "saras_teleop/velocity_integrator.h"
@@ -100,6 +105,7 @@ public:
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
     device_sub_ = nh.subscribe("device_state", 10, &VelocityIntegratorNode::onDevice, this, fast);
     collision_sub_ = nh.subscribe("collision_report", 2, &VelocityIntegratorNode::onCollision, this);
+    jaw_.reset(new JawChannel(nh, pnh, max_step_, [this] { return hold_ || !vi_.commanding(); }));
     t0_ = ros::Time::now();
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &VelocityIntegratorNode::onTimer, this);
     health_.reset(new Health(nh, pnh, name, "set-point",
@@ -140,6 +146,7 @@ private:
   {
     if (m->stale)
       return;
+    jaw_->onDevice(*m);
     const bool was_fault = vi_.faults() > clutch_faults_;
     if (vi_.clutch(m->clutch) && was_fault)
     {
@@ -296,9 +303,11 @@ private:
     s.add("speed scale", vi_.speedScale());
     s.add("received", received_);
     s.add("rejected", rejected_);
+    jaw_->report(s);
   }
 
   VelocityIntegrator vi_;
+  std::unique_ptr<JawChannel> jaw_;  // Simball clip -> instrument jaw
   std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
   RateMeter published_;
   tf2_ros::TransformBroadcaster broadcaster_;
