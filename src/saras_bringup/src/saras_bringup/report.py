@@ -2,7 +2,8 @@
 
 ``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
 master vs slave trajectory per channel, tool distances with the thresholds, tank energies, contact
-forces, the augmented endoscope frame and rviz screenshot (files produced live by the demo and
+forces, estimated vs true contact depths, one recorded endoscope frame with the contact estimate drawn
+(saras_bringup.contact_frame), the augmented endoscope frame and rviz screenshot (files produced live by the demo and
 passed in ``extras``), and the table of recorded topics. A plot whose topics are absent from the
 bag is listed as "not recorded" instead of silently disappearing.
 """
@@ -14,6 +15,8 @@ import numpy as np
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
+
+from saras_bringup.contact_frame import PATCH_RADIUS, write_contact_frame  # noqa: E402
 
 SIDES = ('left', 'right')
 TOOLS = ('mesa_left', 'mesa_right', 'PSM1', 'PSM2')
@@ -247,6 +250,22 @@ def plot_contact_depths(data, t0):
     return fig
 
 
+def contact_frame_section(rep, bag_path, out_dir, patch_radius):
+    """One recorded endoscope frame with the contact estimates drawn (saras_bringup.contact_frame)."""
+    title = 'Vision contact estimate on the endoscope image'
+    try:
+        caption = write_contact_frame(bag_path, os.path.join(out_dir, 'contact_frame.png'), SIDES, patch_radius)
+    except Exception as e:  # a broken drawing must not cost the rest of the report
+        caption, why = None, 'drawing failed: %s' % e
+    else:
+        why = 'no contact estimate with a surface, or its left image / camera_info not recorded'
+    if caption is None:
+        rep.sections.append((title, '<p class="missing">%s</p>' % html.escape(why)))
+    else:
+        rep.sections.append((title, '<img src="contact_frame.png" alt="%s"/><p>%s</p>' % (
+            html.escape(title), html.escape(caption))))
+
+
 def find_param(params, key):
     """First value of ``key`` anywhere in a nested rosparam dump (or None)."""
     if isinstance(params, dict):
@@ -331,6 +350,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
                '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
                '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
+    contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
             with open(os.path.join(out_dir, rel)) as stream:
