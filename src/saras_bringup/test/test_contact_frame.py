@@ -76,3 +76,21 @@ def test_report_step_on_a_small_synthetic_bag(tmp_path):
     with rosbag.Bag(empty, 'w') as bag:
         bag.write('/mesa_left/contact_estimate', Float64MultiArray(data=estimate(1.0, 1, 0.0, 1.0)), rospy.Time(1))
     assert write_contact_frame(empty, str(tmp_path / 'none.png')) is None
+
+
+def test_report_agreement_table_compares_known_estimates_with_the_nearest_truth():
+    pytest.importorskip('matplotlib')
+    import collections
+    from saras_bringup.report import contact_agreement, contact_agreement_html
+    Truth = collections.namedtuple('Truth', 'depth')
+    Est = collections.namedtuple('Est', 'data')
+    truth = [(10.0 + 0.1 * i, Truth(0.003 if i >= 5 else 0.0)) for i in range(10)]
+    est = [(10.0 + 0.1 * i + 0.05, Est(estimate(10.0 + 0.1 * i, 2 if i >= 5 else 1, 0.0035 if i >= 5 else 0.0, 0.8)))
+           for i in range(8)]
+    est.append((11.0, Est(estimate(10.8, 0, float('nan'), 0.0))))
+    rows = contact_agreement({'/mesa_left/contact_truth': truth, '/mesa_left/contact_estimate': est})
+    r = rows['left']
+    assert r['estimates'] == 9 and r['unknown'] == pytest.approx(1 / 9.0)
+    assert r['truth_contact'] == 4 and r['known_in_contact'] == 3          # t = 10.5 .. 10.8; 10.8 unknown
+    assert r['rms_mm'] == pytest.approx(math.sqrt(3 * 0.5 ** 2 / 8.0)) and r['max_true_mm'] == pytest.approx(3.0)
+    assert 'left' in contact_agreement_html(rows) and 'right' not in rows

@@ -250,6 +250,48 @@ def plot_contact_depths(data, t0):
     return fig
 
 
+def contact_agreement(data, max_age=0.1):
+    """Per side: estimates, unknown share, contact frames of the truth, and the depth error of the known
+    estimates against the truth recorded nearest their image stamp (within ``max_age`` s)."""
+    rows = {}
+    for side in SIDES:
+        truth = data.get('/mesa_%s/contact_truth' % side, [])
+        est = [m.data for _, m in data.get('/mesa_%s/contact_estimate' % side, []) if len(m.data) > 4]
+        if not truth or not est:
+            continue
+        tt = np.array([t for t, _ in truth])
+        td = np.array([m.depth for _, m in truth])
+        err, known_in_contact, in_contact = [], 0, 0
+        for d in est:
+            i = int(np.clip(np.searchsorted(tt, d[0]), 1, len(tt) - 1))
+            i = i - 1 if abs(tt[i - 1] - d[0]) < abs(tt[i] - d[0]) else i
+            if abs(tt[i] - d[0]) > max_age:
+                continue
+            in_contact += td[i] > 0
+            if d[1] > 0.5:
+                err.append(d[2] - td[i])
+                known_in_contact += td[i] > 0
+        e = np.abs(np.array(err))
+        rows[side] = {'estimates': len(est), 'unknown': sum(d[1] <= 0.5 for d in est) / float(len(est)),
+                      'truth_contact': int(in_contact), 'known_in_contact': int(known_in_contact),
+                      'rms_mm': 1e3 * float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
+                      'p95_mm': 1e3 * float(np.percentile(e, 95)) if e.size else float('nan'),
+                      'max_true_mm': 1e3 * float(td.max())}
+    return rows
+
+
+def contact_agreement_html(rows):
+    if not rows:
+        return '<p class="missing">no contact truth and estimate recorded</p>'
+    out = ['<tr><th>tool</th><th>estimates</th><th>unknown</th><th>deepest true contact [mm]</th>'
+           '<th>frames in true contact (known)</th><th>depth error RMS / p95 [mm]</th></tr>']
+    for side, r in sorted(rows.items()):
+        out.append('<tr><td>%s</td><td>%d</td><td>%.0f %%</td><td>%.1f</td><td>%d (%d)</td><td>%.2f / %.2f</td></tr>'
+                   % (side, r['estimates'], 100 * r['unknown'], r['max_true_mm'], r['truth_contact'],
+                      r['known_in_contact'], r['rms_mm'], r['p95_mm']))
+    return '<table>%s</table><p>known estimates vs the truth recorded nearest their image stamp</p>' % ''.join(out)
+
+
 def contact_frame_section(rep, bag_path, out_dir, patch_radius):
     """One recorded endoscope frame with the contact estimates drawn (saras_bringup.contact_frame)."""
     title = 'Vision contact estimate on the endoscope image'
@@ -350,6 +392,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
                '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
                '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
+    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(contact_agreement(data))))
     contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
