@@ -28,6 +28,9 @@ def test_flat_surface_depth_and_direction_in_base_frame():
     out = m.estimate([0.01, 0.02, 0.08], np.eye(3))
     assert not out.in_contact and out.depth == 0.0
     np.testing.assert_allclose(out.direction, [0, 0, 1], atol=1e-12)
+    # the tip and its signed distance (the console simulator's dip servo input)
+    np.testing.assert_allclose(out.tip, [0.01, 0.02, 0.08])
+    assert out.signed_distance == pytest.approx(0.01) and est.signed_distance == pytest.approx(-0.005)
 
 
 def test_wavy_surface_depth_matches_brute_force():

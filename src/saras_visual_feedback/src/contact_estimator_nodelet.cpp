@@ -290,16 +290,23 @@ void ContactEstimatorNodelet::publishTool(std::size_t i, const ContactEstimate& 
   if (o.estimate.getNumSubscribers() > 0)
   {
     // [image stamp s, state (0 unknown, 1 no contact, 2 contact), depth m, signed distance m,
-    //  confidence, direction x y z (direction_frame), unknown reason code]
+    //  confidence, direction x y z (direction_frame), unknown reason code,
+    //  surface point x y z m and normal x y z (camera optical frame; NaN when unknown),
+    //  region of interest x y width height (rectified left image, px; 0 when the tip is not projected)]
     std_msgs::Float64MultiArrayPtr m = boost::make_shared<std_msgs::Float64MultiArray>();
     const bool known = direction_ok;
+    const double nan = std::nan("");
     m->data = {stamp.toSec(),
                known ? static_cast<double>(c.state) : 0.0,
-               known ? c.depth : std::nan(""),
-               known ? c.signed_distance : std::nan(""),
+               known ? c.depth : nan,
+               known ? c.signed_distance : nan,
                known ? c.confidence : 0.0,
                dir[0], dir[1], dir[2],
-               static_cast<double>(c.unknown)};
+               static_cast<double>(c.unknown),
+               known ? c.surface.x : nan, known ? c.surface.y : nan, known ? c.surface.z : nan,
+               known ? c.normal[0] : nan, known ? c.normal[1] : nan, known ? c.normal[2] : nan,
+               static_cast<double>(c.roi.x), static_cast<double>(c.roi.y),
+               static_cast<double>(c.roi.width), static_cast<double>(c.roi.height)};
     o.estimate.publish(m);
   }
   std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -2,10 +2,11 @@
 
 ``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
 master vs slave trajectory per channel, the instrument jaw following the Simball clip, tool
-distances with the thresholds, tank energies, contact forces, the augmented endoscope frame and rviz
-screenshot (files produced live by the demo and passed in ``extras``), and the table of recorded
-topics. A plot whose topics are absent from the bag is listed as "not recorded" instead of silently
-disappearing.
+distances with the thresholds, tank energies, contact forces, estimated vs true contact depths, one
+recorded endoscope frame with the contact estimate drawn (saras_bringup.contact_frame), the augmented
+endoscope frame and rviz screenshot (files produced live by the demo and passed in ``extras``), and
+the table of recorded topics. A plot whose topics are absent from the bag is listed as "not recorded"
+instead of silently disappearing.
 """
 import html
 import os
@@ -15,6 +16,8 @@ import numpy as np
 import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
+
+from saras_bringup.contact_frame import PATCH_RADIUS, write_contact_frame  # noqa: E402
 
 SIDES = ('left', 'right')
 TOOLS = ('mesa_left', 'mesa_right', 'PSM1', 'PSM2')
@@ -279,6 +282,64 @@ def plot_contact_depths(data, t0):
     return fig
 
 
+def contact_agreement(data, max_age=0.1):
+    """Per side: estimates, unknown share, contact frames of the truth, and the depth error of the known
+    estimates against the truth recorded nearest their image stamp (within ``max_age`` s)."""
+    rows = {}
+    for side in SIDES:
+        truth = data.get('/mesa_%s/contact_truth' % side, [])
+        est = [m.data for _, m in data.get('/mesa_%s/contact_estimate' % side, []) if len(m.data) > 4]
+        if not truth or not est:
+            continue
+        tt = np.array([t for t, _ in truth])
+        td = np.array([m.depth for _, m in truth])
+        err, known_in_contact, in_contact = [], 0, 0
+        for d in est:
+            i = int(np.clip(np.searchsorted(tt, d[0]), 1, len(tt) - 1))
+            i = i - 1 if abs(tt[i - 1] - d[0]) < abs(tt[i] - d[0]) else i
+            if abs(tt[i] - d[0]) > max_age:
+                continue
+            in_contact += td[i] > 0
+            if d[1] > 0.5:
+                err.append(d[2] - td[i])
+                known_in_contact += td[i] > 0
+        e = np.abs(np.array(err))
+        rows[side] = {'estimates': len(est), 'unknown': sum(d[1] <= 0.5 for d in est) / float(len(est)),
+                      'truth_contact': int(in_contact), 'known_in_contact': int(known_in_contact),
+                      'rms_mm': 1e3 * float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
+                      'p95_mm': 1e3 * float(np.percentile(e, 95)) if e.size else float('nan'),
+                      'max_true_mm': 1e3 * float(td.max())}
+    return rows
+
+
+def contact_agreement_html(rows):
+    if not rows:
+        return '<p class="missing">no contact truth and estimate recorded</p>'
+    out = ['<tr><th>tool</th><th>estimates</th><th>unknown</th><th>deepest true contact [mm]</th>'
+           '<th>frames in true contact (known)</th><th>depth error RMS / p95 [mm]</th></tr>']
+    for side, r in sorted(rows.items()):
+        out.append('<tr><td>%s</td><td>%d</td><td>%.0f %%</td><td>%.1f</td><td>%d (%d)</td><td>%.2f / %.2f</td></tr>'
+                   % (side, r['estimates'], 100 * r['unknown'], r['max_true_mm'], r['truth_contact'],
+                      r['known_in_contact'], r['rms_mm'], r['p95_mm']))
+    return '<table>%s</table><p>known estimates vs the truth recorded nearest their image stamp</p>' % ''.join(out)
+
+
+def contact_frame_section(rep, bag_path, out_dir, patch_radius):
+    """One recorded endoscope frame with the contact estimates drawn (saras_bringup.contact_frame)."""
+    title = 'Vision contact estimate on the endoscope image'
+    try:
+        caption = write_contact_frame(bag_path, os.path.join(out_dir, 'contact_frame.png'), SIDES, patch_radius)
+    except Exception as e:  # a broken drawing must not cost the rest of the report
+        caption, why = None, 'drawing failed: %s' % e
+    else:
+        why = 'no contact estimate with a surface, or its left image / camera_info not recorded'
+    if caption is None:
+        rep.sections.append((title, '<p class="missing">%s</p>' % html.escape(why)))
+    else:
+        rep.sections.append((title, '<img src="contact_frame.png" alt="%s"/><p>%s</p>' % (
+            html.escape(title), html.escape(caption))))
+
+
 def find_param(params, key):
     """First value of ``key`` anywhere in a nested rosparam dump (or None)."""
     if isinstance(params, dict):
@@ -368,6 +429,8 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
                '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
                '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
+    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(contact_agreement(data))))
+    contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
             with open(os.path.join(out_dir, rel)) as stream:

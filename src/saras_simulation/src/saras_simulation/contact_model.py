@@ -13,13 +13,16 @@ import numpy as np
 
 
 class ContactEstimate(object):
-    """depth [m] (>= 0), direction (3,) unit vector in the base frame, in_contact flag."""
-    __slots__ = ('depth', 'direction', 'in_contact')
+    """depth [m] (>= 0), direction (3,) unit vector in the base frame, in_contact flag; tip (3,) [m]
+    in world and its exact signed distance [m] to the surface (> 0 above)."""
+    __slots__ = ('depth', 'direction', 'in_contact', 'tip', 'signed_distance')
 
-    def __init__(self, depth, direction, in_contact):
+    def __init__(self, depth, direction, in_contact, tip=None, signed_distance=float('nan')):
         self.depth = depth
         self.direction = direction
         self.in_contact = in_contact
+        self.tip = tip
+        self.signed_distance = signed_distance
 
 
 class ContactModel(object):
@@ -56,4 +59,4 @@ class ContactModel(object):
         d /= np.linalg.norm(d)
         if not (math.isfinite(depth) and np.all(np.isfinite(d))):
             raise ValueError('contact estimate is not finite')
-        return ContactEstimate(depth, d, in_contact)
+        return ContactEstimate(depth, d, in_contact, tip, float(sd))

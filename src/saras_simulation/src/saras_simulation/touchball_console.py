@@ -79,13 +79,15 @@ class ScriptedMotion(object):
     point lowered by ``dip_depth`` [m] (master space; the slave goes ``scale_factor`` times as far:
     with the default 0.12 m and scale 0.5 the tools, ~5 cm above the tissue at the start, press a
     few mm into it), with smooth (raised-cosine) transitions over a quarter of the dip each, held
-    in between. ``dip_period`` 0 disables.
+    in between. ``dip_period`` 0 disables. With ``servo`` (:class:`saras_simulation.dip_servo.DipServo`,
+    fed with the tool tip the surgeon sees), the dip's depth and place follow the tool instead: the
+    handle goes down until the tip is ``servo.depth`` into the tissue, towards ``servo.site``.
     """
 
     def __init__(self, home=(-0.10, 0.0, 0.08), amplitude=(0.02, 0.03, 0.015),
                  frequency=(0.2, 0.13, 0.17), rpy=(0.0, 0.0, 0.0), rpy_amplitude=0.15,
                  clip_frequency=0.25, clutch_period=0.0, clutch_duration=1.0, phase=0.0,
-                 dip_depth=0.12, dip_period=20.0, dip_duration=9.0, dip_start=5.0):
+                 dip_depth=0.12, dip_period=20.0, dip_duration=9.0, dip_start=5.0, servo=None):
         self.home = tuple(home)
         self.amplitude = tuple(amplitude)
         self.frequency = tuple(frequency)
@@ -97,6 +99,7 @@ class ScriptedMotion(object):
         self.phase = float(phase)
         self.dip_depth, self.dip_period = float(dip_depth), float(dip_period)
         self.dip_duration, self.dip_start = float(dip_duration), float(dip_start)
+        self.servo = servo
         self._w = tuple(2.0 * math.pi * f for f in self.frequency)     # [rad/s]
 
     def __call__(self, t):
@@ -106,9 +109,15 @@ class ScriptedMotion(object):
                self.home[1] + self.amplitude[1] * math.sin(w[1] * t + math.pi / 2),
                self.home[2] + self.amplitude[2] * math.sin(w[2] * t))
         b = self.dip_weight(t)
+        servo = self.servo.update(t - self.phase, b) if self.servo is not None else None   # console time
         if b > 0.0:
-            target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
+            if servo is None:
+                target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
+            else:                               # the servo places the tip: start from the centre
+                target = self.home
             pos = tuple((1.0 - b) * p + b * g for p, g in zip(pos, target))
+            if servo is not None:
+                pos = tuple(p + c for p, c in zip(pos, servo))
         a = self.rpy_amplitude
         q = quat_from_rpy(self.rpy[0] + a * math.sin(w[1] * t), self.rpy[1] + a * math.sin(w[0] * t),
                           self.rpy[2])

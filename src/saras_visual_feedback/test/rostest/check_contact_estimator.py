@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """rostest: ContactEstimator on untextured images is unknown, never a confident zero (see
 contact_estimator.test)."""
+import math
 import sys
 import time
 import unittest
@@ -34,7 +35,8 @@ class TestContactEstimator(unittest.TestCase):
         stamps = [e.data[0] for e in estimates]
         self.assertEqual(len(stamps), len(set(stamps)), 'one estimate per stereo pair')
         for e in estimates:
-            self.assertEqual(len(e.data), 9)
+            self.assertEqual(len(e.data), 19)
+            self.assertTrue(all(math.isnan(v) for v in e.data[9:15]), 'unknown: no surface point or normal')
             self.assertEqual(e.data[1], 0.0, 'state must be unknown on untextured images: %s' % list(e.data))
             self.assertEqual(e.data[4], 0.0, 'unknown estimates have confidence 0')
             self.assertIn(int(e.data[8]), SCENE_REASONS | {NO_POSE})
