@@ -46,7 +46,7 @@ public:
       return;
     msg_.name.assign(1, joint_);
     msg_.position.assign(1, 0.0);
-    pub_ = nh.advertise<sensor_msgs::JointState>("jaw_target", 10);
+    pub_ = nh.advertise<sensor_msgs::JointState>("jaw_target", kStreamQueue);
     state_sub_ = nh.subscribe("jaw_state", 1, &JawChannel::onJawState, this, ros::TransportHints().tcpNoDelay());
     timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / rate), &JawChannel::onTimer, this);
   }
