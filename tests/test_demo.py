@@ -49,7 +49,7 @@ def test_demo_records_every_required_stream_and_writes_the_report(tmp_path):
     report = out / 'report'
     html = (report / 'index.html').read_text()
     for png in ('trajectory_left.png', 'trajectory_right.png', 'distances.png', 'energies.png',
-                'contact_forces.png', 'augmented_stereo.png', 'rviz.png', 'operator_view.png'):
+                'contact_forces.png', 'augmented_stereo.png', 'rviz.png', 'operator_view.png', 'jaw.png'):
         assert (report / png).exists() and (report / png).stat().st_size > 10000, png
         assert png in html
     assert 'not recorded:' not in html and 'not captured:' not in html
