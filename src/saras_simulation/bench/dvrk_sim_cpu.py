@@ -10,24 +10,15 @@ Usage: dvrk_sim_cpu.py [--n N] [--repeat R]   (other arguments of bench/run are 
 """
 import argparse
 import os
-import time
 
 os.environ.setdefault('OPENBLAS_NUM_THREADS', '1')   # as launch/dvrk.launch: 6x6 solves, no BLAS threads
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
 from saras_simulation import dvrk_kinematics, dvrk_sim_core  # noqa: E402
+from saras_simulation.bench_util import best_us  # noqa: E402
 
 CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config', 'dvrk_sim.yaml')
-
-
-def best_us(fn, n, repeat):
-    best = float('inf')
-    for _ in range(repeat):
-        t = time.process_time()
-        fn()
-        best = min(best, (time.process_time() - t) / n * 1e6)
-    return best
 
 
 def main():

@@ -25,7 +25,7 @@ import sys
 import tempfile
 import time
 
-from saras_simulation.bench_util import cpu_seconds, free_port
+from saras_simulation.bench_util import cpu_seconds, free_port, process_cmdlines, stop_process_groups
 
 STREAMS = ['/dvrk/%s/%s' % (arm, t) for arm in ('PSM1', 'PSM2', 'ECM', 'MTML', 'MTMR')
            for t in ('position_cartesian_current', 'state_joint_current')] + \
@@ -46,17 +46,7 @@ LAUNCH = """<launch>
 
 def dvrk_sim_pid():
     """pid of the roslaunch'ed dvrk_sim (from its __name:= argument), or None."""
-    for d in os.listdir('/proc'):
-        if not d.isdigit():
-            continue
-        try:
-            with open('/proc/%s/cmdline' % d, 'rb') as f:
-                args = f.read().split(b'\0')
-        except OSError:
-            continue
-        if b'__name:=dvrk_sim' in args:
-            return int(d)
-    return None
+    return next((pid for pid, args in process_cmdlines() if b'__name:=dvrk_sim' in args), None)
 
 
 class Skipped(object):
@@ -159,16 +149,7 @@ def main():
                                       stderr=subprocess.DEVNULL, start_new_session=True))
         return measure(args)
     finally:
-        for p in reversed(procs):
-            try:
-                os.killpg(p.pid, signal.SIGINT)
-            except OSError:
-                pass
-        for p in reversed(procs):
-            try:
-                p.wait(15)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
+        stop_process_groups(procs, timeout=15.0)
 
 
 if __name__ == '__main__':

@@ -30,7 +30,7 @@ import tempfile
 import threading
 import time
 
-from saras_simulation.bench_util import cpu_seconds, free_port, stop_process_groups
+from saras_simulation.bench_util import cpu_seconds, free_port, process_cmdlines, stop_process_groups
 
 SIDES = ('left', 'right')
 
@@ -38,18 +38,11 @@ SIDES = ('left', 'right')
 def arm_processes():
     """{'<ns>/<node>': pid} of the roslaunch'ed arm processes (from their __log:= argument)."""
     out = {}
-    for d in os.listdir('/proc'):
-        if not d.isdigit():
-            continue
-        try:
-            with open('/proc/%s/cmdline' % d, 'rb') as f:
-                args = f.read().split(b'\0')
-        except OSError:
-            continue
+    for pid, args in process_cmdlines():
         for a in args:
             if a.startswith(b'__log:=') and b'mesa_' in a:
                 name = os.path.basename(a[7:].decode()).rsplit('-', 1)[0]   # mesa_left-saras_arm_sim
-                out[name.replace('-', '/', 1)] = int(d)
+                out[name.replace('-', '/', 1)] = pid
     return out
 
 

@@ -11,20 +11,11 @@ Usage: touchball_cpu.py [--n N] [--repeat R]   (other arguments of bench/run are
 import argparse
 import os
 import sys
-import time
 
 from saras_drivers import touchball_protocol as tp
+from saras_simulation.bench_util import best_us
 from saras_simulation.touchball_console import (ConsoleCalibration, HandDeviceModel, ScriptedMotion,
                                              TouchballConsole)
-
-
-def best_us(fn, n, repeat):
-    best = float('inf')
-    for _ in range(repeat):
-        t = time.process_time()
-        fn()
-        best = min(best, (time.process_time() - t) / n * 1e6)
-    return best
 
 
 def main():
