@@ -138,10 +138,14 @@ class TestLateStamps(unittest.TestCase):
         else:
             # No fallback to the latest pose once the history covers the image stamps (the first
             # images, before the first poses, may be): OK, and the count no longer grows.
-            self.assertEqual(active[-1].level, DiagnosticStatus.OK, active[-1].message)
-            if len(active) >= 2:
-                previous = int(DiagnosticsRecorder.values(active[-2])['poses not at the image stamp'])
-                self.assertEqual(fallbacks, previous)
+            # At least one reporting period OK with no new fallback: a busy host may stall the
+            # pose publisher for a while (a fallback then is right, and warned), but with the
+            # history covering the stamps the count stops growing (with a 2-pose history,
+            # test/visual_feedback_stamp_fallback.test, it grows in every period).
+            counts = [int(DiagnosticsRecorder.values(s)['poses not at the image stamp']) for s in active]
+            quiet = [i for i in range(1, len(active))
+                     if active[i].level == DiagnosticStatus.OK and counts[i] == counts[i - 1]]
+            self.assertTrue(quiet, 'no period without a fallback: %s' % [(s.level, s.message) for s in active[-5:]])
 
 if __name__ == '__main__':
     rospy.init_node('check_late_stamps')
