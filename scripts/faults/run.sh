@@ -48,6 +48,11 @@ start_platform() {  # LOG: roslaunch the platform on this master, wait for the s
 # back LOGFILE PATTERN COUNT TIMEOUT: time when PATTERN appears more than COUNT times in LOGFILE
 back() { local t=0; while [ "$t" -lt $(( $4 * 10 )) ]; do
     [ "$(grep -ac "$2" "$1")" -gt "$3" ] && { now; return; }; sleep 0.1; t=$((t + 1)); done; }
+kill_respawning() {  # NODE LOG_LINE WHAT: SIGKILL a respawning node; t0 = the kill, t1 = its next LOG_LINE
+  local n p; n="$(grep -ac "$2" "$OUT/launch.log")"; p="$(pid_of "$1")"
+  t0=$(now); kill -KILL "$p"; t1="$(back "$OUT/launch.log" "$2" "$n" 60)"
+  [ -z "$t1" ] && { violations="$3 not respawned"; t1=$(now); }
+}
 # the probe is also the operator: it presses the clutch of both devices every 4 s (resume after a hold)
 python3 "$F" probe "$OUT" > "$OUT/probe.log" 2>&1 & probe=$!; pids+=("$probe")
 start_platform ""
@@ -57,9 +62,7 @@ p="$(pid_of /touchball_console_sim)"; t0=$(now); kill -STOP "$p"; sleep 1.5; kil
 sleep 8; record "$t0" "$t1" 0.05
 
 expect driver_kill "left driver killed (respawns): left arm holds <= 50 ms, no motion; resume through the clutch from the held pose, jump < 1 mm, <= 50 mm/s; right arm unaffected; reported" "hold resume right diag"
-n="$(grep -ac 'connected to http://127.0.0.1:5001' "$OUT/launch.log")"
-p="$(pid_of /mesa_left/saras_arms_driver)"; t0=$(now); kill -KILL "$p"; t1="$(back "$OUT/launch.log" 'connected to http://127.0.0.1:5001' "$n" 60)"
-[ -z "$t1" ] && { violations="driver not respawned"; t1=$(now); }
+kill_respawning /mesa_left/saras_arms_driver 'connected to http://127.0.0.1:5001' driver
 sleep 9; record "$t0" "$t1" 0.05
 
 expect contact_force_spoof "1e6 N on /mesa_left/contact_force for 3 s: left arm holds, no motion; then follows again without a jump; right arm unaffected; reported" "hold resume right diag"
@@ -71,9 +74,7 @@ FAULTS_SPOOF_TIMES="$OUT/spoof.txt" python3 "$F" spoof-target left 2.0 > /dev/nu
 sleep 2; record "$t0" "$t1" 0.05
 
 expect arm_sim_kill "left arm simulator killed (respawns at its initial pose): collision distance of the left tool unknown (NaN) while no pose, teleoperation holds; resume only through the clutch, from the measured pose (< 1 mm); right arm unaffected; reported" "resume right diag unknown"
-n="$(grep -ac 'saras_arm_sim: mesa_left on' "$OUT/launch.log")"
-p="$(pid_of /mesa_left/saras_arm_sim)"; t0=$(now); kill -KILL "$p"; t1="$(back "$OUT/launch.log" 'saras_arm_sim: mesa_left on' "$n" 60)"
-[ -z "$t1" ] && { violations="arm simulator not respawned"; t1=$(now); }
+kill_respawning /mesa_left/saras_arm_sim 'saras_arm_sim: mesa_left on' "arm simulator"
 sleep 10; record "$t0" "$t1" 0.05
 
 expect disk_full "a second recorder on an 8 MB disk: stops writing naming the disk, closes an indexed bag, counts what it lost" "none"
