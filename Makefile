@@ -1,6 +1,7 @@
 # SARAS MULTIROBOTS-SURGERY platform — entry points.
 #   make demo   install what is missing, build, run the platform headless, write OUT/
 #   make test   install what is missing, build, run every test suite
+#   make bench  every package benchmark; make bench-platform: the platform at 1 kHz/720p, CPU per process
 #   make faults build, run the platform and inject faults one by one, judge them (OUT/faults.md)
 #   make cluster           (root) the platform on six machines as network namespaces, report per machine
 #   make cluster-impaired  (root) the teleoperation across impaired links: delay/loss x tanks on/bypassed
@@ -16,7 +17,7 @@ IMPAIRED_OUT ?= $(CURDIR)/out/cluster_impaired
 IMPAIRED_DURATION ?= 20
 CASES ?=
 
-.PHONY: all setup build test demo bench faults lint run clean cluster cluster-impaired
+.PHONY: all setup build test demo bench bench-platform faults lint run clean cluster cluster-impaired
 
 all: build
 
@@ -44,6 +45,9 @@ run: build
 
 bench: build
 	@bash scripts/bench.sh
+
+bench-platform: build
+	@bash scripts/bench_platform.sh "$(if $(filter command line,$(origin DURATION)),$(DURATION),60)" "$(if $(filter command line,$(origin OUT)),$(OUT),$(CURDIR)/out/bench_platform)"
 
 faults: build
 	@bash scripts/faults/run.sh "$(if $(filter command line,$(origin OUT)),$(OUT),$(CURDIR)/out/faults)"

@@ -3,6 +3,7 @@
 #   OUT/platform.bag            the recording (rosbag of src/saras_bringup/config/recording.yaml)
 #   OUT/report/index.html       plots, augmented stereo frame, operator view page, rviz screenshot, topic table
 #   OUT/bag_check.txt           per-topic counts, rates, sequence/stamp gaps
+#   OUT/report/cpu.txt          CPU per process over the recording against its budget
 #   OUT/launch.log              everything the nodes printed
 # Exit status: 0 when every required stream was recorded at rate without lost messages,
 # 1 naming the missing streams otherwise, 2 when the platform could not start.
@@ -69,15 +70,10 @@ if ! wait_recording "$record_pid" "$OUT/platform.bag"; then
   echo "demo: the recorder stopped; see $OUT/recorder.log"; exit 2
 fi
 
-capture_at=$(( DURATION > 8 ? DURATION - 5 : DURATION / 2 ))
-vf_start=$(( DURATION > 12 ? 2 : 0 ))
+# CPU of every process over the recording window (two /proc samples, nothing runs in between)
+rosrun saras_bringup proc_cpu sample --root "$launch_pid" --root "$record_pid" --out "$OUT/cpu_start.json" \
+  || echo "demo: CPU sample failed"
 for ((t = 0; t < DURATION; t++)); do
-  if [ $t -eq $vf_start ]; then
-    # augmented stereo stream for the report: last pair + which warning colours occurred
-    rosrun saras_visual_feedback visual_feedback_snapshot _output:="$REPORT/augmented_stereo" \
-      _duration:=$(( capture_at - vf_start - 1 )) >"$OUT/snapshot.log" 2>&1 &
-    snap_pid=$!
-  fi
   sleep 1
   if ! kill -0 "$launch_pid" 2>/dev/null; then
     echo "demo: the platform stopped early; last lines of $OUT/launch.log:"; tail -n 30 "$OUT/launch.log"
@@ -85,13 +81,10 @@ for ((t = 0; t < DURATION; t++)); do
   fi
 done
 
-# The recording lasts DURATION s; the snapshot (whose start-up takes 5-15 s on a loaded 2-core
-# host) may finish after it, while the platform still runs.
+rosrun saras_bringup proc_cpu sample --root "$launch_pid" --root "$record_pid" --out "$OUT/cpu_end.json" \
+  || echo "demo: CPU sample failed"
 echo "demo: stopping the recording"
 stop_pid "$record_pid" "the recorder" "$OUT/platform.bag.active"
-[ -n "${snap_pid:-}" ] && wait "$snap_pid"
-colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
-echo "demo: visual feedback: $colours"
 # after the recording (a browser costs a core for a few seconds): the operator view page as a browser shows it
 echo "demo: operator view page in headless Chromium"
 rosrun saras_operator_view page_screenshot "http://127.0.0.1:$view_port/" "$REPORT/operator_view.png" \
@@ -106,6 +99,11 @@ stop_pid "$launch_pid" roslaunch
 if ! close_bag "$OUT/platform.bag"; then
   echo "demo: no recording was written ($OUT/platform.bag missing)"; exit 2
 fi
+# The demo's own measurements read the bag afterwards: nothing but the platform runs while it records.
+rosrun saras_visual_feedback visual_feedback_snapshot "$OUT/platform.bag" --output "$REPORT/augmented_stereo" \
+  >"$OUT/snapshot.log" 2>&1 || echo "demo: no augmented stereo in the recording (see $OUT/snapshot.log)"
+colours="$(python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(d)" "$REPORT/augmented_stereo.json" 2>/dev/null || echo 'no augmented images captured')"
+echo "demo: visual feedback: $colours"
 
 # rviz is not run during the recording (software GL would take a core from the 1 kHz loops); the
 # screenshot replays the recording into rviz, which also shows that `rosbag play` reproduces the scene.
@@ -125,13 +123,17 @@ echo "demo: hand-eye calibration benchmark (${HANDEYE_TRIALS:-10} trials per sce
 TRIALS="${HANDEYE_TRIALS:-10}" bash "$SARAS_WS/src/saras_calibration/bench/run" >"$REPORT/hand_eye_bench.txt" 2>&1 \
   || echo "demo: hand-eye benchmark failed (see $REPORT/hand_eye_bench.txt)"
 
+echo "demo: CPU per process over the recording [% of one core]"
+rosrun saras_bringup proc_cpu table "$OUT/cpu_start.json" "$OUT/cpu_end.json" --text "$REPORT/cpu.txt" \
+  --json "$REPORT/cpu.json" || echo "demo: no CPU table"
 rosrun saras_bringup bag_check "$OUT/platform.bag" --control-rate "$CONTROL_RATE" --json "$REPORT/topics.json" | tee "$OUT/bag_check.txt"
 check_rc=${PIPESTATUS[0]}
 rosrun saras_bringup make_report "$OUT/platform.bag" "$REPORT" --check "$REPORT/topics.json" \
   --params "$OUT/params.yaml" \
-  --extra "Augmented stereo endoscope frame|augmented_stereo.png|/visual_feedback/{left,right}/image (HMD images), last pair of the run; over the run: $colours" \
+  --extra "Augmented stereo endoscope frame|augmented_stereo.png|/visual_feedback/{left,right}/image (HMD images, recorded as JPEG), last pair of the run; over the run: $colours" \
   --extra "Hand-eye calibration: robust solver vs OpenCV methods|hand_eye_bench.txt|src/saras_calibration/bench/run with TRIALS=${HANDEYE_TRIALS:-10} (README: 100 trials)" \
   --extra "Operator view (browser page, headless Chromium)|operator_view.png|http://127.0.0.1:<operator_view_port>/ served by saras_operator_view during the run, captured after the recording: augmented stereo, tool distances with their colours, tank energies, component health; $(tail -n 1 "$OUT/operator_view.log" 2>/dev/null)" \
+  --extra "CPU per process over the recording|cpu.txt|percent of one core between the start and the end of the recording (/proc, saras_bringup proc_cpu), budgets of saras_bringup/config/cpu_budget.yaml (set for 1 kHz and 720p30; this run: $CONTROL_RATE Hz, ${endo_w}x${endo_h})" \
   --extra "rviz (headless, Xvfb)|rviz.png|the recording replayed into rviz (roslaunch saras_bringup replay.launch bag:=...), Figure 4 scene" \
   --summary "make demo DURATION=$DURATION CONTROL_RATE=$CONTROL_RATE: simulated platform, $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "demo: report at $REPORT/index.html"

@@ -12,7 +12,7 @@ import rosgraph.masterapi
 
 IGNORED_TOPICS = ('/rosout', '/rosout_agg', '/clock', '/tf', '/tf_static', '/diagnostics', '/diagnostics_agg',
                   '/diagnostics_toplevel_state')
-IGNORED_NODES = ('/rosout', '/rostopic', '/rosnode', '/wait_ready', '/recorder', '/visual_feedback_snapshot', '/node_graph')
+IGNORED_NODES = ('/rosout', '/rostopic', '/rosnode', '/wait_ready', '/recorder', '/node_graph')
 
 
 def ident(name):

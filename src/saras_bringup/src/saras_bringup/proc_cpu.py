@@ -1,0 +1,135 @@
+"""CPU share of every process of a running platform, from ``/proc`` (Linux), against a budget.
+
+Two samples of a process tree (``sample``) taken at the start and the end of a recording give each
+process's CPU time over that window (``shares``): user + system time of the process, in percent of
+one core. Processes are named as ROS names them: ``__name:=`` of the command line in the namespace of
+its ``ROS_NAMESPACE``; a helper process without a name (e.g. the ``rosbag record`` child of the
+recorder) counts for its nearest named ancestor; roslaunch and the master by their programs.
+``budget_rows`` classifies the processes (simulators vs product) and checks each against the budgets of
+``config/cpu_budget.yaml``. Reading /proc costs a few milliseconds per sample: nothing runs in between.
+"""
+import os
+import time
+
+CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+
+class BudgetError(ValueError):
+    """A malformed budget file."""
+
+
+def _read(path, mode='r'):
+    try:
+        with open(path, mode) as stream:
+            return stream.read()
+    except OSError:
+        return None
+
+
+def _stat(pid):
+    """(ppid, utime + stime [ticks], starttime [ticks]) of a process, None when it is gone."""
+    text = _read('/proc/%d/stat' % pid)
+    if text is None:
+        return None
+    fields = text[text.rindex(')') + 2:].split()   # after "pid (comm) "; comm may hold spaces
+    return int(fields[1]), int(fields[11]) + int(fields[12]), int(fields[19])
+
+
+def _own_name(pid):
+    """The ROS name of a process (``/ns/name``), its program for roslaunch/rosmaster, else None."""
+    raw = _read('/proc/%d/cmdline' % pid, 'rb')
+    if not raw:
+        return None
+    argv = [a.decode(errors='replace') for a in raw.split(b'\0') if a]
+    for a in argv:
+        if a.startswith('__name:='):
+            env = _read('/proc/%d/environ' % pid, 'rb') or b''
+            ns = next((e[len(b'ROS_NAMESPACE='):].decode() for e in env.split(b'\0')
+                       if e.startswith(b'ROS_NAMESPACE=')), '')
+            return '/' + '/'.join(p for p in ns.split('/') + [a[len('__name:='):]] if p)
+    for program in ('roslaunch', 'rosmaster', 'roscore'):
+        if any(os.path.basename(a) == program for a in argv[:3]):
+            return program
+    return None
+
+
+def _all_pids():
+    return [int(d) for d in os.listdir('/proc') if d.isdigit()]
+
+
+def sample(roots):
+    """CPU ticks of every process in the trees under ``roots`` (pids): {'wall': s, 'procs': [...]}."""
+    stats = {}
+    for pid in _all_pids():
+        st = _stat(pid)
+        if st is not None:
+            stats[pid] = st
+    children = {}
+    for pid, (ppid, _, _) in stats.items():
+        children.setdefault(ppid, []).append(pid)
+    procs, stack = [], [(r, None) for r in roots if r in stats]
+    while stack:
+        pid, parent_label = stack.pop()
+        label = _own_name(pid) or parent_label or _comm(pid)
+        _, ticks, start = stats[pid]
+        procs.append({'pid': pid, 'start': start, 'name': label, 'ticks': ticks})
+        stack.extend((c, label if label not in ('roslaunch',) else None) for c in children.get(pid, ()))
+    return {'wall': time.monotonic(), 'procs': procs}
+
+
+def _comm(pid):
+    return (_read('/proc/%d/comm' % pid) or '?').strip()
+
+
+def shares(before, after):
+    """{name: percent of one core} over the window between two samples (processes started in the
+    window count from their start; processes that ended in it are missing)."""
+    wall = after['wall'] - before['wall']
+    if wall <= 0:
+        raise ValueError('the second sample must be later than the first')
+    old = {(p['pid'], p['start']): p['ticks'] for p in before['procs']}
+    out = {}
+    for p in after['procs']:
+        delta = p['ticks'] - old.get((p['pid'], p['start']), 0)
+        out[p['name']] = out.get(p['name'], 0.0) + 100.0 * delta / CLK_TCK / wall
+    return out
+
+
+def parse_budget(data):
+    """Validate a budget file's content: {'simulators': [names], 'budgets': {name: %}, 'product_total': %}."""
+    if not isinstance(data, dict):
+        raise BudgetError('the budget file must be a mapping')
+    sims = data.get('simulators', [])
+    budgets = data.get('budgets', {})
+    total = data.get('product_total')
+    if not isinstance(sims, list) or not all(isinstance(s, str) and s.startswith('/') for s in sims):
+        raise BudgetError('simulators: a list of ROS names (/ns/name)')
+    if not isinstance(budgets, dict) or not all(
+            isinstance(v, (int, float)) and 0 < v <= 100 for v in budgets.values()):
+        raise BudgetError('budgets: ROS name -> percent of one core in (0, 100]')
+    if not isinstance(total, (int, float)) or not 0 < total <= 200:
+        raise BudgetError('product_total: percent of one core in (0, 200]')
+    return {'simulators': list(sims), 'budgets': dict(budgets), 'product_total': float(total)}
+
+
+def budget_rows(cpu, budget):
+    """Rows (name, kind, percent, budget or None, ok) sorted by kind then cost, and the product total row."""
+    rows = []
+    for name, pct in cpu.items():
+        kind = 'simulator' if name in budget['simulators'] else 'product'
+        limit = budget['budgets'].get(name)
+        rows.append((name, kind, pct, limit, limit is None or pct <= limit))
+    rows.sort(key=lambda r: (r[1] != 'product', -r[2]))
+    product = sum(r[2] for r in rows if r[1] == 'product')
+    total = ('product processes together', 'product', product, budget['product_total'],
+             product <= budget['product_total'])
+    return rows, total
+
+
+def table_text(rows, total):
+    """Plain-text table of :func:`budget_rows` (the demo prints it and the report shows it)."""
+    lines = ['%-40s %-9s %8s %8s  %s' % ('process', 'kind', 'CPU [%]', 'budget', 'verdict')]
+    for name, kind, pct, limit, ok in list(rows) + [total]:
+        lines.append('%-40s %-9s %8.1f %8s  %s' % (name, kind, pct, '-' if limit is None else '%.0f' % limit,
+                                                 '' if limit is None else ('ok' if ok else 'OVER')))
+    return '\n'.join(lines)

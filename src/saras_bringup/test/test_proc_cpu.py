@@ -1,0 +1,75 @@
+"""proc_cpu: per-process CPU from /proc, named as ROS names them, checked against a budget."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from saras_bringup import proc_cpu
+
+BUSY = 'import time\nt = time.process_time()\nwhile time.process_time() - t < 0.6: pass\ntime.sleep(30)'
+BUDGET = {'simulators': ['/sim'], 'budgets': {'/ns/busy': 5}, 'product_total': 60}
+
+
+def test_a_busy_named_node_and_its_unnamed_child():
+    env = dict(os.environ, ROS_NAMESPACE='/ns')
+    parent = subprocess.Popen(['/bin/sh', '-c', 'sleep 30 & exec %s -c "$0" __name:=busy' % sys.executable, BUSY],
+                              env=env, start_new_session=True)
+    try:
+        time.sleep(0.3)
+        before = proc_cpu.sample([parent.pid])
+        time.sleep(1.5)
+        after = proc_cpu.sample([parent.pid])
+    finally:
+        os.killpg(parent.pid, signal.SIGKILL)
+        parent.wait()
+    assert sorted(p['name'] for p in after['procs']) == ['/ns/busy', '/ns/busy']   # python + its sleep
+    cpu = proc_cpu.shares(before, after)
+    assert 15.0 < cpu['/ns/busy'] < 110.0           # it burnt CPU for part of the window
+    assert proc_cpu.shares(after, after.copy() | {'wall': after['wall'] + 1})['/ns/busy'] == 0.0
+
+
+def test_unnamed_children_count_for_their_named_parent():
+    before = {'wall': 0.0, 'procs': [{'pid': 1, 'start': 5, 'name': '/rec', 'ticks': 0},
+                                     {'pid': 2, 'start': 6, 'name': '/rec', 'ticks': 0}]}
+    after = {'wall': 2.0, 'procs': [{'pid': 1, 'start': 5, 'name': '/rec', 'ticks': proc_cpu.CLK_TCK // 2},
+                                    {'pid': 2, 'start': 6, 'name': '/rec', 'ticks': proc_cpu.CLK_TCK // 2},
+                                    {'pid': 3, 'start': 9, 'name': '/new', 'ticks': proc_cpu.CLK_TCK}]}
+    cpu = proc_cpu.shares(before, after)
+    assert cpu['/rec'] == pytest.approx(50.0)
+    assert cpu['/new'] == pytest.approx(50.0)      # started in the window: counted from its start
+
+
+def test_a_reused_pid_is_a_new_process():
+    before = {'wall': 0.0, 'procs': [{'pid': 1, 'start': 5, 'name': '/a', 'ticks': 10 ** 6}]}
+    after = {'wall': 1.0, 'procs': [{'pid': 1, 'start': 7, 'name': '/a', 'ticks': proc_cpu.CLK_TCK // 10}]}
+    assert proc_cpu.shares(before, after)['/a'] == pytest.approx(10.0)
+
+
+def test_budget_rows_and_verdicts():
+    budget = proc_cpu.parse_budget(BUDGET)
+    rows, total = proc_cpu.budget_rows({'/ns/busy': 7.0, '/other': 3.0, '/sim': 50.0}, budget)
+    assert [r[0] for r in rows] == ['/ns/busy', '/other', '/sim']
+    assert rows[0][4] is False and rows[1][4] is True and rows[2][1] == 'simulator'
+    assert total[2] == pytest.approx(10.0) and total[4] is True
+    text = proc_cpu.table_text(rows, total)
+    assert 'OVER' in text and 'product processes together' in text
+
+
+@pytest.mark.parametrize('bad', [
+    [], {'simulators': 'x', 'budgets': {}, 'product_total': 60},
+    {'simulators': [], 'budgets': {'/a': 0}, 'product_total': 60},
+    {'simulators': [], 'budgets': {'/a': 'ten'}, 'product_total': 60},
+    {'simulators': [], 'budgets': {}, 'product_total': None}])
+def test_bad_budget_files_are_refused(bad):
+    with pytest.raises(proc_cpu.BudgetError):
+        proc_cpu.parse_budget(bad)
+
+
+def test_the_shipped_budget_is_valid():
+    import yaml
+    path = os.path.join(os.path.dirname(__file__), '..', 'config', 'cpu_budget.yaml')
+    budget = proc_cpu.parse_budget(yaml.safe_load(open(path)))
+    assert budget['budgets']['/teleop/teleop_manager'] == 12 and budget['product_total'] == 60
