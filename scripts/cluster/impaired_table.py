@@ -14,11 +14,11 @@ COLUMNS = [('case', '%s'), ('e0_J', '%.2f'), ('entered_J', '%.3f'), ('delivered_
            ('net_max_J', '%.3f'), ('passive', '%s'), ('tracking_rms_mm_left', '%.2f'),
            ('tracking_rms_mm_right', '%.2f'), ('time_to_hold_s_left', '%s'), ('time_to_hold_s_right', '%s'),
            ('robot_hold_s_left', '%s'), ('robot_hold_s_right', '%s'),
-           ('contact_max_N_left', '%.1f'), ('contact_max_N_right', '%.1f'), ('contact_s', '%.1f'),
+           ('slave_travel_mm_left', '%.1f'), ('slave_travel_mm_right', '%.1f'), ('contact_max_N_left', '%.1f'), ('contact_max_N_right', '%.1f'), ('contact_s', '%.1f'),
            ('bag_check', '%s')]
 HEAD = ['case', 'E0 [J]', 'entered [J]', 'delivered [J]', 'max net out [J]', 'passive',
         'tracking RMS L [mm]', 'tracking RMS R [mm]', 'set-point hold L [s]', 'set-point hold R [s]',
-        'robot still L [s]', 'robot still R [s]', 'contact max L [N]', 'contact max R [N]',
+        'robot still L [s]', 'robot still R [s]', 'slave travel L [mm]', 'slave travel R [mm]', 'contact max L [N]', 'contact max R [N]',
         'in contact L+R [s]', 'bag_check']
 
 

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from saras_bringup.passivity import (contact_summary, energy_balance, port_energy, port_power, time_to_hold,
-                                    tracking_error)
+                                    tracking_error, travel)
 
 
 def test_port_power_holds_the_latest_conjugate():
@@ -59,3 +59,8 @@ def test_contact_summary_peak_and_time_in_contact():
     peak, held = contact_summary(forces)
     assert peak == pytest.approx(5.0) and held == pytest.approx(2.0)
     assert contact_summary([]) == (0.0, 0)
+
+
+def test_travel_is_the_largest_distance_from_the_start():
+    assert travel([(0.0, (1.0, 0.0, 0.0)), (1.0, (1.0, 0.3, 0.4)), (2.0, (1.0, 0.0, 0.1))]) == pytest.approx(0.5)
+    assert travel([]) == 0.0

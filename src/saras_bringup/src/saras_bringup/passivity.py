@@ -58,6 +58,14 @@ def contact_summary(forces, threshold=0.1):
     return peak, held
 
 
+def travel(positions):
+    """Largest distance [m] of [(t, (x, y, z))] from its first position (0 without samples)."""
+    if not positions:
+        return 0.0
+    p0 = positions[0][1]
+    return max(math.sqrt(sum((a - b) ** 2 for a, b in zip(p, p0))) for _, p in positions)
+
+
 def energy_balance(powers, e0):
     """powers: list of [(t, P, dt)] (one per port); e0: initial stored energy [J].
 
