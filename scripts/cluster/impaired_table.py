@@ -42,8 +42,13 @@ def bag_check_summary(path):
     short = []
     for p in problems:
         rate = re.search(r'rate ([0-9.]+) Hz', p)
-        short.append(p.split(' (')[0] + (' %s Hz' % rate.group(1) if rate else ''))
-    return '; '.join(short)
+        skew = re.search(r'^machine (\S+): header stamps ([0-9.]+) ms (ahead|behind)', p)
+        if skew:
+            short.append('%s stamps %s ms %s' % skew.groups())
+        else:
+            short.append(p.split(' (')[0] + (' %s Hz' % rate.group(1) if rate else ''))
+    more = ' (+%d more)' % (len(short) - 4) if len(short) > 4 else ''
+    return '%d: %s%s' % (len(short), '; '.join(short[:4]), more)
 
 
 def main(out, cases):
