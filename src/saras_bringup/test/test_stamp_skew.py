@@ -43,7 +43,7 @@ def test_ahead_limit_is_separate_from_the_latency_limit():
     assert flag_machines(per, 20.0) == []                  # symmetric 20 ms: a 3.4 ms lead passes
     problems = flag_machines(per, 20.0, 2.0)               # stamps 3.4 ms in the future: a clock ahead
     assert len(problems) == 1 and 'dvrk_pc' in problems[0] and 'ahead' in problems[0] and 'limit 2 ms' in problems[0]
-    assert flag_machines(per, 10.0, 2.0)[1].startswith('machine teleop_pc') # 12 ms late beyond 10 ms
+    assert flag_machines(per, 10.0, 2.0)[1].startswith('machine teleop_pc')  # 12 ms late beyond 10 ms
 
 
 def test_topic_from_two_machines_is_left_out():
