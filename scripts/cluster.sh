@@ -20,6 +20,7 @@
 #                     (needs an IMPAIR_* setting, e.g. IMPAIR_DELAY_MS=0; for the time-to-hold)
 #   FAKETIME_MACHINE, FAKETIME   run that (non-core) machine's nodes with its clock shifted by
 #                     FAKETIME seconds (libfaketime; e.g. dvrk_pc +0.05)
+#   MAX_SKEW_MS, MAX_AHEAD_MS   bag_check's stamp-skew limits per machine (20 ms late, 2 ms ahead)
 #   SARAS_NETNS_PREFIX, SARAS_NETNS_SUBNET, SARAS_NETNS_RUN   as scripts/cluster/netns.sh
 # Exit: 0 all required streams recorded, 1 problems (named), 2 no start, 77 not root (skipped).
 set -uo pipefail
@@ -160,7 +161,8 @@ main() {
   stop_pid "$launch_pid" roslaunch
   close_bag "$BAG" || { echo "cluster: no recording was written ($BAG missing)"; exit 2; }
   rosrun saras_bringup bag_check "$BAG" --config "$RECORDING" --control-rate "$CONTROL_RATE" \
-    --machines "$OUT/machines.json" --json "$REPORT/topics.json" | tee "$OUT/bag_check.txt"
+    --machines "$OUT/machines.json" --max-skew-ms "${MAX_SKEW_MS:-20}" --max-ahead-ms "${MAX_AHEAD_MS:-2}" \
+    --json "$REPORT/topics.json" | tee "$OUT/bag_check.txt"
   local check_rc=${PIPESTATUS[0]}
   rosrun saras_bringup make_report "$BAG" "$REPORT" --check "$REPORT/topics.json" --params "$OUT/params.yaml" \
     --machines "$OUT/machines.json" \

@@ -1,21 +1,25 @@
 #!/usr/bin/env python3
 """Table (markdown + HTML with the energy plots) of the impaired-network runs of cluster_impaired.sh.
 
-  scripts/cluster/impaired_table.py OUT CASE...     (reads OUT/<case>/energy.json, writes OUT/table.md, OUT/index.html)
+  scripts/cluster/impaired_table.py OUT CASE...     (reads OUT/<case>/energy.json and
+  OUT/<case>/report/topics.json (bag_check), writes OUT/table.md, OUT/index.html)
 """
 import html
 import json
 import os
+import re
 import sys
 
 COLUMNS = [('case', '%s'), ('e0_J', '%.2f'), ('entered_J', '%.3f'), ('delivered_J', '%.3f'),
            ('net_max_J', '%.3f'), ('passive', '%s'), ('tracking_rms_mm_left', '%.2f'),
            ('tracking_rms_mm_right', '%.2f'), ('time_to_hold_s_left', '%s'), ('time_to_hold_s_right', '%s'),
            ('robot_hold_s_left', '%s'), ('robot_hold_s_right', '%s'),
-           ('exit', '%s')]
+           ('slave_travel_mm_left', '%.1f'), ('slave_travel_mm_right', '%.1f'), ('contact_max_N_left', '%.1f'), ('contact_max_N_right', '%.1f'), ('contact_s', '%.1f'),
+           ('bag_check', '%s')]
 HEAD = ['case', 'E0 [J]', 'entered [J]', 'delivered [J]', 'max net out [J]', 'passive',
         'tracking RMS L [mm]', 'tracking RMS R [mm]', 'set-point hold L [s]', 'set-point hold R [s]',
-        'robot still L [s]', 'robot still R [s]', 'cluster.sh exit']
+        'robot still L [s]', 'robot still R [s]', 'slave travel L [mm]', 'slave travel R [mm]', 'contact max L [N]', 'contact max R [N]',
+        'in contact L+R [s]', 'bag_check']
 
 
 def cell(row, key, fmt):
@@ -25,6 +29,26 @@ def cell(row, key, fmt):
     if isinstance(v, float) and fmt == '%s':
         return '%.3f' % v
     return fmt % v
+
+
+def bag_check_summary(path):
+    """'ok', or the problems of bag_check's JSON shortened to 'topic rate' / the machine line."""
+    if not os.path.exists(path):
+        return 'no result'
+    with open(path) as stream:
+        problems = json.load(stream).get('problems', [])
+    if not problems:
+        return 'ok'
+    short = []
+    for p in problems:
+        rate = re.search(r'rate ([0-9.]+) Hz', p)
+        skew = re.search(r'^machine (\S+): header stamps ([0-9.]+) ms (ahead|behind)', p)
+        if skew:
+            short.append('%s stamps %s ms %s' % skew.groups())
+        else:
+            short.append(p.split(' (')[0] + (' %s Hz' % rate.group(1) if rate else ''))
+    more = ' (+%d more)' % (len(short) - 4) if len(short) > 4 else ''
+    return '%d: %s%s' % (len(short), '; '.join(short[:4]), more)
 
 
 def main(out, cases):
@@ -37,6 +61,9 @@ def main(out, cases):
         else:
             row = {'case': c}
         row['case'] = c
+        if 'contact_s_left' in row:
+            row['contact_s'] = row['contact_s_left'] + row.get('contact_s_right', 0.0)
+        row['bag_check'] = bag_check_summary(os.path.join(out, c, 'report', 'topics.json'))
         rows.append(row)
     md = ['| ' + ' | '.join(HEAD) + ' |', '|' + '---|' * len(HEAD)]
     md += ['| ' + ' | '.join(cell(r, k, f) for k, f in COLUMNS) + ' |' for r in rows]

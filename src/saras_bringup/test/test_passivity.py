@@ -3,7 +3,8 @@ import math
 
 import pytest
 
-from saras_bringup.passivity import energy_balance, port_power, time_to_hold, tracking_error
+from saras_bringup.passivity import (contact_summary, energy_balance, port_energy, port_power, time_to_hold,
+                                    tracking_error, travel)
 
 
 def test_port_power_holds_the_latest_conjugate():
@@ -43,3 +44,23 @@ def test_time_to_hold():
     assert time_to_hold(sp, 3.0) == pytest.approx(0.3, abs=0.011)
     moving = [(0.01 * i, (0.01 * i, 0.0, 0.0)) for i in range(600)]
     assert time_to_hold(moving, 3.0) is None
+
+
+def test_port_energy_splits_delivered_and_injected():
+    port = [(0.01 * i, 2.0 if i < 100 else -0.5, 0.01) for i in range(300)]
+    d, i = port_energy(port)
+    assert d == pytest.approx(2.0) and i == pytest.approx(1.0)
+    assert port_energy([]) == (0, 0)
+
+
+def test_contact_summary_peak_and_time_in_contact():
+    forces = [(0.1 * i, (0.0, 0.0, 3.0 if 10 <= i < 30 else 0.0)) for i in range(50)]
+    forces[15] = (1.5, (4.0, 0.0, -3.0))
+    peak, held = contact_summary(forces)
+    assert peak == pytest.approx(5.0) and held == pytest.approx(2.0)
+    assert contact_summary([]) == (0.0, 0)
+
+
+def test_travel_is_the_largest_distance_from_the_start():
+    assert travel([(0.0, (1.0, 0.0, 0.0)), (1.0, (1.0, 0.3, 0.4)), (2.0, (1.0, 0.0, 0.1))]) == pytest.approx(0.5)
+    assert travel([]) == 0.0

@@ -38,6 +38,14 @@ def test_machine_skew_is_its_lowest_stream_and_flags_the_shifted_one():
     assert flag_machines(machine_skews({'/x': 0.08}, {'/x': ['/dvrk/dvrk_sim']}, NODES), 20.0)[0].count('behind') == 1
 
 
+def test_ahead_limit_is_separate_from_the_latency_limit():
+    per = machine_skews({'/a': -0.0034, '/b': 0.012}, {'/a': ['/dvrk/dvrk_sim'], '/b': ['/teleop/teleop_manager']}, NODES)
+    assert flag_machines(per, 20.0) == []                  # symmetric 20 ms: a 3.4 ms lead passes
+    problems = flag_machines(per, 20.0, 2.0)               # stamps 3.4 ms in the future: a clock ahead
+    assert len(problems) == 1 and 'dvrk_pc' in problems[0] and 'ahead' in problems[0] and 'limit 2 ms' in problems[0]
+    assert flag_machines(per, 10.0, 2.0)[1].startswith('machine teleop_pc')  # 12 ms late beyond 10 ms
+
+
 def test_topic_from_two_machines_is_left_out():
     per = machine_skews({'/tf_like': -0.5}, {'/tf_like': ['/dvrk/dvrk_sim', '/teleop/teleop_manager']}, NODES)
     assert per == {}
@@ -60,7 +68,7 @@ def write_bag(path, offset_s):
                     'md5sum': PoseStamped._md5sum, 'message_definition': PoseStamped._full_text})
 
 
-@pytest.mark.parametrize('offset_s,flagged', [(0.0, False), (0.05, True), (-0.08, True)])
+@pytest.mark.parametrize('offset_s,flagged', [(0.0, False), (0.005, True), (0.05, True), (-0.005, False), (-0.08, True)])
 def test_bag_check_flags_the_machine_with_shifted_stamps(tmp_path, offset_s, flagged):
     bag = str(tmp_path / 'skew.bag')
     write_bag(bag, offset_s)

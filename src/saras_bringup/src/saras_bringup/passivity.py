@@ -44,6 +44,28 @@ def port_power(actions, conjugates):
     return [tuple(r) for r in out]
 
 
+def port_energy(power):
+    """(delivered, injected) [J] of one port's [(t, P, dt)]: integrals of its positive and negative power."""
+    d = sum(p * dt for _, p, dt in power if p > 0.0)
+    return d, -sum(p * dt for _, p, dt in power if p < 0.0)
+
+
+def contact_summary(forces, threshold=0.1):
+    """(max |F| [N], seconds with |F| > threshold [N]) of [(t, 3+-vector)] force samples (ZOH)."""
+    mags = [(t, math.sqrt(sum(v * v for v in f[:3]))) for t, f in forces]
+    peak = max((m for _, m in mags), default=0.0)
+    held = sum(b[0] - a[0] for a, b in zip(mags, mags[1:]) if a[1] > threshold)
+    return peak, held
+
+
+def travel(positions):
+    """Largest distance [m] of [(t, (x, y, z))] from its first position (0 without samples)."""
+    if not positions:
+        return 0.0
+    p0 = positions[0][1]
+    return max(math.sqrt(sum((a - b) ** 2 for a, b in zip(p, p0))) for _, p in positions)
+
+
 def energy_balance(powers, e0):
     """powers: list of [(t, P, dt)] (one per port); e0: initial stored energy [J].
 

@@ -7,7 +7,14 @@ first sample, a contact estimate by the pose it used) more; a publisher whose cl
 the core PC's makes it negative by the offset, one whose clock runs behind makes it larger by the
 offset. A machine's skew is the lowest of its streams' skews, the stream closest to its clock
 (streams attributed to the machine of the node that published them, the bag's connection header
-``callerid``). ``flag_machines`` flags the machines whose skew is outside ``[-max_skew, +max_skew]``.
+``callerid``). ``flag_machines`` flags the machines whose skew is outside ``[-max_ahead, +max_skew]``.
+
+The two limits differ because the two directions differ. A message is stamped before it is sent, so
+with synchronised clocks ``receive - stamp`` is never negative: a machine whose streams arrive
+*before* their stamps has its clock ahead, whatever the load, and ``max_ahead`` can be tight (the
+clock monitor's 2 ms). A positive skew mixes transport latency (a few ms, more on a loaded host) with
+a clock running behind, so ``max_skew`` has to stay above the latency (20 ms); smaller offsets
+behind are the clock monitor's to find (its four-timestamp method cancels the latency).
 """
 
 
@@ -57,22 +64,30 @@ def machine_skews(topic_skews, topic_publishers, node_machine):
     return {m: {'skew_ms': min(s.values()), 'streams': s} for m, s in per.items()}
 
 
-def flag_machines(per_machine, max_skew_ms):
-    """Problems (one line per machine) whose stamp skew is beyond +-max_skew_ms."""
+def skewed(skew_ms, max_skew_ms, max_ahead_ms=None):
+    """True when a machine's skew [ms] is below -max_ahead_ms (default: max_skew_ms) or above max_skew_ms."""
+    ahead = max_skew_ms if max_ahead_ms is None else max_ahead_ms
+    return skew_ms < -ahead or skew_ms > max_skew_ms
+
+
+def flag_machines(per_machine, max_skew_ms, max_ahead_ms=None):
+    """Problems (one line per machine) whose stamp skew is outside [-max_ahead_ms, +max_skew_ms]
+    (max_ahead_ms None: +-max_skew_ms)."""
     problems = []
     for machine, row in sorted(per_machine.items()):
         skew = row['skew_ms']
-        if abs(skew) > max_skew_ms:
-            how = 'ahead of' if skew < 0 else 'behind'
+        if skewed(skew, max_skew_ms, max_ahead_ms):
+            ahead = skew < 0
+            limit = max_skew_ms if not ahead or max_ahead_ms is None else max_ahead_ms
             problems.append('machine %s: header stamps %.1f ms %s the recorder\'s clock (lowest of %d streams; '
                             'limit %.0f ms): check its clock (clock_monitor, chrony)'
-                            % (machine, abs(skew), how, len(row['streams']), max_skew_ms))
+                            % (machine, abs(skew), 'ahead of' if ahead else 'behind', len(row['streams']), limit))
     return problems
 
 
-def format_machines(per_machine, max_skew_ms):
+def format_machines(per_machine, max_skew_ms, max_ahead_ms=None):
     lines = ['%-14s %10s %8s  %s' % ('machine', 'skew[ms]', 'streams', 'status')]
     for machine, row in sorted(per_machine.items()):
-        status = 'STAMP SKEW' if abs(row['skew_ms']) > max_skew_ms else 'ok'
+        status = 'STAMP SKEW' if skewed(row['skew_ms'], max_skew_ms, max_ahead_ms) else 'ok'
         lines.append('%-14s %10.1f %8d  %s' % (machine, row['skew_ms'], len(row['streams']), status))
     return '\n'.join(lines)
