@@ -32,23 +32,28 @@ def test_stale_observation_holds_the_offsets():
 
 
 def test_between_dips_the_tip_is_brought_to_the_working_height():
-    s = DipServo(hover=0.012, speed=0.012, gain=2.0, slack=0.006)
-    for i in range(26):                                       # 5 cm above, following: down at `speed`
-        s.observe(0.04 * i, (0.0, 0.0, 0.1 - 0.001 * i), 0.05)
+    s = DipServo(hover=0.012, speed=0.012, gain=2.0, slack=0.006, scale=0.5)
+    tip = [0.0, 0.0, 0.12]
+    for i in range(50):                                       # 5 cm above, following: down at `speed`
+        s.observe(0.04 * i, tuple(tip), tip[2] - 0.07)
+        s.handle((0.0, 0.0, -s.offset))
         s.update(0.04 * i, 0.0)
-    assert s.offset == pytest.approx(0.012 * 1.0, rel=0.01)
-    for i in range(26, 76):                                   # the tip stops following: slack more at most
-        s.observe(0.04 * i, (0.0, 0.0, 0.075), 0.05)
-        s.update(0.04 * i, 0.0)
-    assert 0.012 < s.offset <= 0.012 + 0.012 * 0.5 + 0.006 + 1e-9     # + what the window still saw moving
-    s.observe(3.04, (0.0, 0.0, 0.06), 0.005)                  # below the working height: back up
+        tip[2] = 0.12 - 0.5 * s.offset                         # the tool follows the handle
+    assert s.offset == pytest.approx(0.012 * 49 * 0.04, rel=0.02)
     before = s.offset
-    s.update(3.08, 0.0)
+    for i in range(50, 150):                                  # the tool stops following: slack more at most
+        s.observe(0.04 * i, tuple(tip), tip[2] - 0.07)
+        s.handle((0.0, 0.0, -s.offset))
+        s.update(0.04 * i, 0.0)
+    assert before < s.offset <= before + 0.012 * 1.0 + 0.006 + 1e-9   # + what the window still saw following
+    s.observe(6.04, (0.0, 0.0, 0.075), 0.005)                 # below the working height: back up
+    before = s.offset
+    s.update(6.08, 0.0)
     assert s.offset < before
 
 
 @pytest.mark.parametrize('kw', [{'depth': -0.001}, {'speed': float('nan')}, {'site': (0.0,)},
-                                {'hover': -0.01}])
+                                {'hover': -0.01}, {'scale': 0.0}])
 def test_bad_parameters_are_rejected(kw):
     with pytest.raises(ValueError):
         DipServo(**kw)

@@ -16,9 +16,12 @@ kinematics and tissue model). It keeps a persistent handle offset (master space)
   ``aim_gain``, at most half ``speed`` per axis, within ``max_aim``; kept after the dip, so the surgeon
   goes on working where the endoscope sees the contact.
 
-Anti wind-up: the offsets move at most ``slack`` [m, master] away from their values when the tip
-was last seen moving (more than ``min_motion`` [m] within ``follow_window`` [s]): a tool that does
-not follow (teleoperation not engaged yet, held, clutched) does not pull the handle away.
+Anti wind-up: the offsets move at most ``slack`` [m, master] away from an anchor, their values when
+the tool was last seen following the handle: over the last ``follow_window`` [s] the tip moved along
+the handle's motion (:meth:`handle`: the position the handle is given, path and offsets; scaled by
+``scale``, master to slave) by at least ``follow_ratio`` of it, or, with the handle still,
+the offsets are near the anchor (at rest) or the tip still moves towards them (catching up). A tool that does not follow
+(teleoperation not engaged yet, held, clutched, set-points not executed) does not pull the handle away.
 
 ``speed`` is the pace the SARAS chain can follow on a loaded host: the teleoperation lets the
 set-point lead the measured tip by only ``max_lead`` (3 mm, velocity_integrator) and reports a lead
@@ -48,26 +51,32 @@ class DipServo(object):
     (master), timeout [s] (observation age)."""
 
     def __init__(self, depth=0.003, site=None, hover=0.012, gain=2.0, aim_gain=1.0, speed=0.012,
-                 max_offset=0.2, max_aim=0.08, timeout=0.5, slack=0.006, follow_window=0.5, min_motion=0.0008):
+                 max_offset=0.2, max_aim=0.08, timeout=0.5, slack=0.006, min_motion=0.001, scale=0.5,
+                 follow_ratio=0.3, follow_window=1.0):
         for name, v in (('depth', depth), ('gain', gain), ('aim_gain', aim_gain), ('speed', speed),
                         ('max_offset', max_offset), ('max_aim', max_aim), ('timeout', timeout),
-                        ('slack', slack), ('follow_window', follow_window), ('min_motion', min_motion)) + (
+                        ('slack', slack), ('min_motion', min_motion), ('follow_window', follow_window),
+                        ('scale', scale), ('follow_ratio', follow_ratio)) + (
                             () if hover is None else (('hover', hover),)):
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError('dip servo: %s must be finite and >= 0, got %r' % (name, v))
+        if not scale > 0.0:
+            raise ValueError('dip servo: scale must be > 0, got %r' % (scale,))
         if site is not None and (len(site) != 2 or not all(math.isfinite(s) for s in site)):
             raise ValueError('dip servo: site must be two finite numbers [m], got %r' % (site,))
         self.depth, self.gain, self.aim_gain, self.speed = float(depth), float(gain), float(aim_gain), float(speed)
         self.max_offset, self.max_aim, self.timeout = float(max_offset), float(max_aim), float(timeout)
-        self.slack, self.follow_window, self.min_motion = float(slack), float(follow_window), float(min_motion)
+        self.slack, self.min_motion = float(slack), float(min_motion)
+        self.scale, self.follow_ratio, self.follow_window = float(scale), float(follow_ratio), float(follow_window)
         self.hover = None if hover is None else float(hover)
         self.site = None if site is None else (float(site[0]), float(site[1]))
         self._open = False      # this dip began without observation
         self._obs = None        # (t, tip (x, y, z), signed distance)
         self._t = None
         self._b, self._lifting = 0.0, False     # last dip weight; in the dip's ramp down
-        self._seen = collections.deque()     # (t, tip) of the last follow_window s
-        self._anchor = (0.0, (0.0, 0.0))        # (offset, aim) when the tip was last seen moving
+        self._anchor = (0.0, (0.0, 0.0))        # (offset, aim) when the tool was last seen following
+        self._seen = collections.deque()        # (t, tip, handle) of the last follow_window s
+        self._handle = None                     # latest handle position [m] (handle())
         self.offset = 0.0       # e [m] downward
         self.aim = (0.0, 0.0)   # a [m]
 
@@ -75,7 +84,8 @@ class DipServo(object):
         """Tip position (world, m) and its signed distance to the tissue [m] (> 0 above) at script time t."""
         if all(math.isfinite(v) for v in tuple(tip) + (signed_distance,)):
             self._obs = (float(t), tuple(float(v) for v in tip), float(signed_distance))
-            self._seen.append(self._obs[:2])
+            if self._handle is not None:
+                self._seen.append((self._obs[0], self._obs[1], self._handle))
             while self._seen and self._seen[0][0] < t - self.follow_window:
                 self._seen.popleft()
 
@@ -115,9 +125,23 @@ class DipServo(object):
             self.aim = tuple(v * self.max_aim / n for v in a) if n > self.max_aim else tuple(a)
         return (self.aim[0], self.aim[1], -self.offset)
 
+    def handle(self, position):
+        """The handle position [m] (master) the offsets were added to this step: the anti wind-up's reference."""
+        self._handle = tuple(position)
+
     def _following(self):
-        """The tip moved more than ``min_motion`` within the last ``follow_window`` of observations."""
+        """Over the last follow_window the tip followed the handle, or both were at rest (module doc)."""
         if len(self._seen) < 2:
             return False
-        first, last = self._seen[0][1], self._seen[-1][1]
-        return math.sqrt(sum((a - b) ** 2 for a, b in zip(first, last))) > self.min_motion
+        (_, tip0, h0), (_, tip1, h1) = self._seen[0], self._seen[-1]
+        want = [self.scale * (b - a) for a, b in zip(h0, h1)]   # slave motion the handle asked for
+        n = math.sqrt(sum(v * v for v in want))
+        if n < self.min_motion:                 # handle still: at rest, or held at the anti wind-up limit
+            (e0, a0) = self._anchor
+            d = [self.aim[0] - a0[0], self.aim[1] - a0[1], e0 - self.offset]   # offsets since the anchor
+            m = math.sqrt(sum(v * v for v in d))
+            if m < 0.5 * self.slack:
+                return True
+            return sum((b - a) * v for a, b, v in zip(tip0, tip1, d)) / m >= self.min_motion   # catching up
+        moved = sum((b - a) * v for a, b, v in zip(tip0, tip1, want)) / n
+        return moved >= self.follow_ratio * n

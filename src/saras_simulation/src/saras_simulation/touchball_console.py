@@ -124,6 +124,7 @@ class ScriptedMotion(object):
             pos = tuple((1.0 - b) * p + b * g for p, g in zip(pos, target))
         if servo is not None:                   # working height and dip (dip_servo), aim at the site
             pos = tuple(p + c for p, c in zip(pos, servo))
+            self.servo.handle(pos)
         a = self.rpy_amplitude
         q = quat_from_rpy(self.rpy[0] + a * math.sin(w[1] * t), self.rpy[1] + a * math.sin(w[0] * t),
                           self.rpy[2])
