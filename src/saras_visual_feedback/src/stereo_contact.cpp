@@ -226,10 +226,8 @@ bool validateStereoContactParams(const StereoContactParams& p, std::string* erro
     why = "refine_iterations must be in [0, 100]";
   else if (!(p.contact_threshold >= 0.0))
     why = "contact_threshold must be >= 0 m";
-  else if (p.max_roi < 32)
-    why = "max_roi must be >= 32 px";
-  else if (p.sample_grid < 16)
-    why = "sample_grid must be >= 16 samples";
+  else if (p.max_roi < 32 || p.sample_grid < 16)
+    why = p.max_roi < 32 ? "max_roi must be >= 32 px" : "sample_grid must be >= 16 samples";
   if (error)
     *error = why;
   return why.empty();
