@@ -92,6 +92,8 @@ int main(int argc, char** argv)
         params.patch_radius = std::stod(next());
       else if (a == "--max-roi")
         params.max_roi = std::stoi(next());
+      else if (a == "--grid")
+        params.sample_grid = std::stoi(next());
       else if (a == "--refine")
         params.refine_iterations = std::stoi(next());
       else if (a == "--repeat")

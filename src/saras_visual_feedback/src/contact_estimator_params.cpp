@@ -56,6 +56,7 @@ void readEstimator(const ros::NodeHandle& pnh, StereoContactParams* e)
   pnh.param("refine_iterations", e->refine_iterations, e->refine_iterations);
   pnh.param("contact_threshold", e->contact_threshold, e->contact_threshold);
   pnh.param("max_roi", e->max_roi, e->max_roi);
+  pnh.param("sample_grid", e->sample_grid, e->sample_grid);
   std::string why;
   if (!validateStereoContactParams(*e, &why))
     throw paramError(why.substr(0, why.find(' ')), why);

@@ -9,7 +9,10 @@ namespace saras_visual_feedback
 {
 namespace
 {
-constexpr int kParams = 7;  ///< 6 quadric coefficients + intensity offset
+constexpr int kParams = 9;  ///< 6 quadric coefficients + photometric: offset, x and y gradient
+constexpr int kFineIterations = 2;     ///< refinement iterations kept for the full sample set
+constexpr double kCoarseStep = 0.02;   ///< [px] update below which the coarse iterations end
+constexpr int kCoarseMinPixels = 2000; ///< smaller regions (in samples) are refined at full density only
 
 /// Least-squares plane d = c0 + c1 x + c2 y on the samples within @p threshold of @p s (or all when < 0).
 int refitPlane(const std::vector<cv::Point3f>& samples, double threshold, DisparitySurface* s)
@@ -46,9 +49,18 @@ struct Sample
 {
   float r, g, x, y;  ///< residual, right gradient, normalised coordinates
 };
+/// Left-eye intensity predicted from the right eye's: R + offset + gx x + gy y. Each eye sees the tissue
+/// under its own light: an intensity gradient between the eyes across the region, read as disparity,
+/// tilts the surface (contact_accuracy, 640x360: normal error RMS 9.1 deg with an offset only, 4.7 deg
+/// with the gradient; an intensity gain as well did not help).
+struct Photometric
+{
+  double offset = 0.0, gx = 0.0, gy = 0.0;
+  double operator()(double ri, double x, double y) const { return ri + offset + gx * x + gy * y; }
+};
 /// Residuals and right gradients of the unmasked ROI pixels (every @p stride px) under @p s.
 void residuals(const StereoRegion& g, const cv::Mat& left, const cv::Mat& right, const cv::Mat& grad,
-               const DisparitySurface& s, double offset, int stride, std::vector<Sample>* samples,
+               const DisparitySurface& s, const Photometric& ph, int stride, std::vector<Sample>* samples,
                std::vector<float>* abs_r)
 {
   samples->clear();
@@ -70,9 +82,10 @@ void residuals(const StereoRegion& g, const cv::Mat& left, const cv::Mat& right,
       const double xr = u - s(u, v) - g.origin_right.x;
       if (!(xr >= 0.0 && xr < right.cols - 1) || mr[static_cast<int>(xr + 0.5)])
         continue;
-      const float res = static_cast<float>(l[x] - sampleRow(r, xr) - offset);
-      samples->push_back({res, sampleRow(gr, xr), static_cast<float>((u - s.u0) / s.s),
-                          static_cast<float>((v - s.v0) / s.s)});
+      const float ri = sampleRow(r, xr), nx = static_cast<float>((u - s.u0) / s.s),
+                  ny = static_cast<float>((v - s.v0) / s.s);
+      const float res = static_cast<float>(l[x] - ph(ri, nx, ny));
+      samples->push_back({res, sampleRow(gr, xr), nx, ny});
       abs_r->push_back(std::abs(res));
     }
   }
@@ -124,10 +137,13 @@ RefineResult refineDisparity(const StereoRegion& g, int stride, int iterations, 
   cv::Sobel(right, grad, CV_32F, 1, 0, 1, 0.5);  // central difference d/du
   std::vector<Sample> samples;
   std::vector<float> abs_r;
-  double offset = 0.0;  // left - right intensity
+  Photometric ph;
+  // Coarse to fine: Gauss-Newton iterations on every other sample (a quarter of the pixels) until the
+  // update is small, then on all of them, which decide the result (same optimum, ~half the CPU).
+  bool fine = iterations <= kFineIterations || g.roi.area() < kCoarseMinPixels * stride * stride;
   for (int it = 0; it < iterations; ++it)
   {
-    residuals(g, left, right, grad, *s, offset, stride, &samples, &abs_r);
+    residuals(g, left, right, grad, *s, ph, fine ? stride : 2 * stride, &samples, &abs_r);
     if (samples.size() < 50)
       return out;
     // Tukey biweight, scale from the median absolute residual.
@@ -143,8 +159,9 @@ RefineResult refineDisparity(const StereoRegion& g, int stride, int iterations, 
       if (std::abs(q.r) >= c)
         continue;
       const double t = 1.0 - (q.r / c) * (q.r / c), w = t * t;
-      // r = L - R(u - d) - offset: dr/dc_k = g * phi_k, dr/doffset = -1
-      const double J[kParams] = {q.g, q.g * q.x, q.g * q.y, q.g * q.x * q.x, q.g * q.x * q.y, q.g * q.y * q.y, -1.0};
+      // r = L - R(u - d) - offset - gx x - gy y: dr/dc_k = R' phi_k, dr/d(offset, gx, gy) = -(1, x, y)
+      const double J[kParams] = {q.g, q.g * q.x, q.g * q.y, q.g * q.x * q.x, q.g * q.x * q.y, q.g * q.y * q.y,
+                                 -1.0, -q.x, -q.y};
       for (int i = 0; i < kParams; ++i)
       {
         b[i] -= w * J[i] * q.r;
@@ -175,11 +192,15 @@ RefineResult refineDisparity(const StereoRegion& g, int stride, int iterations, 
       s->c[static_cast<std::size_t>(i)] += delta[i];
       step += std::abs(delta[i]);
     }
-    offset += delta[6];
+    ph.offset += delta[6];
+    ph.gx += delta[7];
+    ph.gy += delta[8];
     out.pixels = used;
     out.rms = std::sqrt(ss / std::max(1e-9, ws));
     out.step = step;
-    if (step < 1e-3)
+    if (!fine)
+      fine = step < kCoarseStep || it + 1 >= iterations - kFineIterations;
+    else if (step < 1e-3)
       break;
   }
   return out;

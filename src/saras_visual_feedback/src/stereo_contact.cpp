@@ -226,8 +226,8 @@ bool validateStereoContactParams(const StereoContactParams& p, std::string* erro
     why = "refine_iterations must be in [0, 100]";
   else if (!(p.contact_threshold >= 0.0))
     why = "contact_threshold must be >= 0 m";
-  else if (p.max_roi < 32)
-    why = "max_roi must be >= 32 px";
+  else if (p.max_roi < 32 || p.sample_grid < 16)
+    why = p.max_roi < 32 ? "max_roi must be >= 32 px" : "sample_grid must be >= 16 samples";
   if (error)
     *error = why;
   return why.empty();
@@ -548,7 +548,7 @@ ContactEstimate StereoContactEstimator::estimate(const cv::Mat& left, const cv::
   int shift = 0, num_disp = 0;
   matchRegion(left, right, tools, n, roi, z, &shift, &num_disp);
 
-  const int step = std::max(1, roi.width / 80);
+  const int step = std::max(1, roi.width / p_.sample_grid);
   int unmasked = 0;
   const int count = collectSamples(roi, shift, num_disp, step, &unmasked);
   out.points = count;

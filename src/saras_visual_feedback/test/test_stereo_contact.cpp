@@ -76,6 +76,10 @@ TEST(StereoContact, ParamsValidated)
   p.block_size = 8;
   EXPECT_FALSE(validateStereoContactParams(p, &why));
   EXPECT_NE(why.find("block_size"), std::string::npos);
+  p = StereoContactParams();
+  p.sample_grid = 8;
+  EXPECT_FALSE(validateStereoContactParams(p, &why));
+  EXPECT_NE(why.find("sample_grid"), std::string::npos);
 }
 
 TEST(StereoContact, RejectsCalibrationWithoutBaseline)

@@ -81,13 +81,17 @@ class ScriptedMotion(object):
     few mm into it), with smooth (raised-cosine) transitions over a quarter of the dip each, held
     in between. ``dip_period`` 0 disables. With ``servo`` (:class:`saras_simulation.dip_servo.DipServo`,
     fed with the tool tip the surgeon sees), the dip's depth and place follow the tool instead: the
-    handle goes down until the tip is ``servo.depth`` into the tissue, towards ``servo.site``.
+    handle goes down until the tip is ``servo.depth`` into the tissue, towards ``servo.site``, and
+    between dips the path is offset to keep the tip ``servo.hover`` above the tissue. The surgeon
+    then also moves along the path at ``pace`` (0-1) times its frequencies and stops on it during a
+    dip (no blend towards ``home``): the pace a SARAS chain whose set-point may lead the arm by only
+    a few mm follows on a loaded host (:mod:`saras_simulation.dip_servo`).
     """
 
     def __init__(self, home=(-0.10, 0.0, 0.08), amplitude=(0.02, 0.03, 0.015),
                  frequency=(0.2, 0.13, 0.17), rpy=(0.0, 0.0, 0.0), rpy_amplitude=0.15,
                  clip_frequency=0.25, clutch_period=0.0, clutch_duration=1.0, phase=0.0,
-                 dip_depth=0.12, dip_period=20.0, dip_duration=9.0, dip_start=5.0, servo=None):
+                 dip_depth=0.12, dip_period=20.0, dip_duration=9.0, dip_start=5.0, servo=None, pace=1.0):
         self.home = tuple(home)
         self.amplitude = tuple(amplitude)
         self.frequency = tuple(frequency)
@@ -100,24 +104,27 @@ class ScriptedMotion(object):
         self.dip_depth, self.dip_period = float(dip_depth), float(dip_period)
         self.dip_duration, self.dip_start = float(dip_duration), float(dip_start)
         self.servo = servo
+        if not (math.isfinite(pace) and 0.0 < pace <= 1.0):
+            raise ValueError('pace must be in (0, 1], got %r' % (pace,))
+        self.pace = float(pace)
+        self._path = None                       # (console time, path time) [s]
         self._w = tuple(2.0 * math.pi * f for f in self.frequency)     # [rad/s]
 
     def __call__(self, t):
+        b = self.dip_weight(t + self.phase)
+        servo = self.servo.update(t, b) if self.servo is not None else None   # console time
+        u = self._path_time(t, servo is not None, b) + self.phase
         t = t + self.phase
         w = self._w
-        pos = (self.home[0] + self.amplitude[0] * math.sin(w[0] * t),
-               self.home[1] + self.amplitude[1] * math.sin(w[1] * t + math.pi / 2),
-               self.home[2] + self.amplitude[2] * math.sin(w[2] * t))
-        b = self.dip_weight(t)
-        servo = self.servo.update(t - self.phase, b) if self.servo is not None else None   # console time
-        if b > 0.0:
-            if servo is None:
-                target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
-            else:                               # the servo places the tip: start from the centre
-                target = self.home
+        pos = (self.home[0] + self.amplitude[0] * math.sin(w[0] * u),
+               self.home[1] + self.amplitude[1] * math.sin(w[1] * u + math.pi / 2),
+               self.home[2] + self.amplitude[2] * math.sin(w[2] * u))
+        if b > 0.0 and servo is None:
+            target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
             pos = tuple((1.0 - b) * p + b * g for p, g in zip(pos, target))
-            if servo is not None:
-                pos = tuple(p + c for p, c in zip(pos, servo))
+        if servo is not None:                   # working height and dip (dip_servo), aim at the site
+            pos = tuple(p + c for p, c in zip(pos, servo))
+            self.servo.handle(pos)
         a = self.rpy_amplitude
         q = quat_from_rpy(self.rpy[0] + a * math.sin(w[1] * t), self.rpy[1] + a * math.sin(w[0] * t),
                           self.rpy[2])
@@ -126,6 +133,16 @@ class ScriptedMotion(object):
                   (t % self.clutch_period) > self.clutch_period - self.clutch_duration)
         return Intention(pos, q, clip, clutch, clip > 0.9)
 
+
+    def _path_time(self, t, servoed, b):
+        """Time along the Lissajous path [s]: console time, or with a servo watching the tool
+        ``pace`` times as fast and slowed to a stop during a dip (the surgeon presses, then goes on)."""
+        if self._path is None or not servoed:
+            self._path = (t, t)
+        else:
+            last_t, last_u = self._path
+            self._path = (t, last_u + max(0.0, t - last_t) * self.pace * (1.0 - b))
+        return self._path[1]
 
     def dip_weight(self, t):
         """Blend weight [0, 1] of the contact dip at script time ``t`` [s]."""

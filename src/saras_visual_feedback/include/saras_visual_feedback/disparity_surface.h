@@ -59,7 +59,7 @@ struct RefineResult
 
 /**
  * @brief Photometric refinement of @p surface (a quadric, or a plane when @p quadric is false, plus an
- *        intensity offset between the eyes) over the region's unmasked left pixels sampled every
+ *        intensity offset and gradient between the eyes) over the region's unmasked left pixels sampled every
  *        @p stride px. @return pixels 0 when it could not run (too few pixels, singular system).
  */
 RefineResult refineDisparity(const StereoRegion& region, int stride, int iterations, bool quadric,

@@ -70,6 +70,7 @@ struct StereoContactParams
   int refine_iterations = 10;        ///< photometric (Gauss-Newton) refinement of the disparity surface
   double contact_threshold = 0.0;    ///< [m] depth above this is a contact (0: any penetration)
   int max_roi = 160;                 ///< [px] largest ROI side (the patch is shrunk beyond)
+  int sample_grid = 40;              ///< ROI samples per side at most (every max(1, side / sample_grid) px)
 };
 
 /// Checks ranges; on failure names the offending parameter in @p error.
