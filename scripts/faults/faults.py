@@ -57,6 +57,12 @@ def probe(out):
         for s in m.status:
             if s.level >= 2:
                 writer('diag').writerow(('%.6f' % time.time(), s.level, s.name, s.message))
+            if s.name.endswith('console link'):      # the receiver's counters (packet faults)
+                v = dict((kv.key, kv.value) for kv in s.values)
+                writer('link').writerow(['%.6f' % time.time(), s.level, v.get('packets received', ''),
+                                         v.get('rejected datagrams', '')] +
+                                        ['%s=%s' % (k[9:], x) for k, x in sorted(v.items())
+                                         if k.startswith('rejected ') and k != 'rejected datagrams' and x != '0'])
 
     rospy.Subscriber('/collision/report', CollisionReport, on_collision, queue_size=10)
     rospy.Subscriber('/diagnostics', DiagnosticArray, on_diag, queue_size=50)
@@ -209,6 +215,8 @@ def judge(out, ev, nxt_t):
     if keys == ['none']:
         r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
         return r, bad
+    if 'packets' in keys:
+        return judge_packets(out, ev, r, bad, sp, sp_r)
     # hold: the command chain (set-point frozen, re-anchors on the clutch aside); motion: the arm
     # after the hold plus SETTLE for the simulated arm's own state latency
     arm_hold = hold_time(ee, t_f, t_back)
@@ -267,6 +275,57 @@ def judge(out, ev, nxt_t):
         r['peak speed on recovery [mm/s]'] = 'arm %.1f (degraded)' % (1e3 * v)
         if v > 0.012:
             bad.append('arm at %.1f mm/s without collision monitoring' % (1e3 * v))
+    r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
+    return r, bad
+
+
+def link_at(rows, t, after=False):
+    """The receiver's counters (t, received, rejected, {reason: n}) last before t (first after t)."""
+    rows = [x for x in rows if (float(x[0]) >= t if after else float(x[0]) <= t) and x[2] and x[3]]
+    if not rows:
+        return None
+    x = rows[0] if after else rows[-1]
+    return float(x[0]), int(x[2]), int(x[3]), dict((k, int(n)) for k, n in (c.split('=') for c in x[4:]))
+
+
+def judge_packets(out, ev, r, bad, sp, sp_r):
+    """Hostile console datagrams: counted as rejected, the real stream keeps its rate (or the chain
+    holds <= hold_limit), the set-point never jumps, the receiver survives (run.sh's violations)."""
+    t_f, t_back, lim = float(ev['t_fault']), float(ev['t_back']), float(ev['hold_limit'])
+    sent = dict((x[0], int(x[1])) for x in load(out, 'sent')).get(ev['fault'], 0)
+    link = load(out, 'link')
+    a, b, pre = link_at(link, t_f - 0.05), link_at(link, t_back + 1.2, after=True), link_at(link, t_f - 6.0)
+    if not (a and b and pre):
+        bad.append('no console-link counters on /diagnostics')
+        r['verdict'] = 'VIOLATED: ' + '; '.join(bad)
+        return r, bad
+    rejected = b[2] - a[2]
+    reasons = ', '.join('%s +%d' % (k, n - a[3].get(k, 0)) for k, n in sorted(b[3].items()) if n > a[3].get(k, 0))
+    nominal = (a[1] - pre[1]) / (a[0] - pre[0])
+    during = (b[1] - a[1]) / (b[0] - a[0])
+    r['/diagnostics ERROR/STALE'] = 'rejected +%d of %d sent (%s)' % (rejected, sent, reasons)
+    r['arm motion after hold [mm]'] = 'real stream %.0f Hz (before %.0f Hz)' % (during, nominal)
+    gaps = {}
+    for side, rows in (('left', sp), ('right', sp_r)):
+        w = window(rows, t_f, t_back)
+        gaps[side] = max([y[0] - x[0] for x, y in zip(w, w[1:])], default=float('inf'))
+    r['hold [ms]'] = 'longest set-point gap %.0f / %.0f' % (1e3 * gaps['left'], 1e3 * gaps['right'])
+    w = window(sp, t_f, t_back + 1.0)
+    step = max((math.dist(x[1], y[1]) for x, y in zip(w, w[1:])), default=0.0)
+    v = peak_speed(sp, t_f, t_back + 1.0, span=0.05)
+    r['peak speed on recovery [mm/s]'] = 'set-point %.1f, largest step %.2f mm' % (1e3 * v, 1e3 * step)
+    if rejected < 0.9 * sent * ('flood' not in ev['fault']) or rejected <= 0:
+        bad.append('only %d of %d hostile datagrams counted as rejected' % (rejected, sent))
+    if during < 0.9 * nominal and max(gaps.values()) > lim:
+        bad.append('real stream %.0f Hz < 90 %% of %.0f Hz with set-point gaps of %.0f ms > %.0f ms'
+                   % (during, nominal, 1e3 * max(gaps.values()), 1e3 * lim))
+    stale = sorted(set(d[2].split(':')[0] for d in load(out, 'diag') if t_f <= float(d[0]) < t_back + 0.5
+                       and ('console link' in d[2] or 'HOLD' in d[3])))
+    if stale:
+        r['resumed after [s]'] = 'held: ' + ', '.join(stale)
+        bad.append('the real stream was interrupted (%s)' % ', '.join(stale))
+    if step > 0.001 or v > 0.050:
+        bad.append('set-point jumped (%.2f mm step, %.1f mm/s)' % (1e3 * step, 1e3 * v))
     r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
     return r, bad
 

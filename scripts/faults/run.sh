@@ -73,6 +73,30 @@ expect zero_stamp_target_spoof "zero-stamp targets 2 cm deeper at 500 Hz for 2 s
 FAULTS_SPOOF_TIMES="$OUT/spoof.txt" python3 "$F" spoof-target left 2.0 > /dev/null 2>&1; read -r t0 t1 < "$OUT/spoof.txt"
 sleep 2; record "$t0" "$t1" 0.05
 
+# console packets (loopback, no key): 1 s of the console's real, accepted state packets captured first
+P="$here/packets.py"; cport=8888
+python3 "$P" capture "$cport" 1.0 "$OUT/captured.bin" > "$OUT/captured.txt" 2>&1 || echo "   (no console packets captured)"
+echo "fault,sent" > "$OUT/sent.csv"
+# hostile KIND SECONDS RATE: send, then judge the receiver's survival (same process, no respawn)
+hostile() {
+  local before_r before_m out; before_r="$(pid_of /touchball_receiver)"; before_m="$(pid_of /teleop/teleop_manager)"
+  out="$(python3 "$P" "$1" "$cport" "$2" "$3" "$OUT/captured.bin" 2>> "$OUT/packets.log")"
+  read -r t0 t1 sent <<< "${out:-0 0 0}"; [ "$t0" = 0 ] && { t0=$(now); t1=$t0; violations+="nothing sent;"; }
+  echo "$name,$sent" >> "$OUT/sent.csv"
+  sleep 3
+  [ -n "$before_r" ] && [ "$(pid_of /touchball_receiver)" = "$before_r" ] && [ "$(pid_of /teleop/teleop_manager)" = "$before_m" ] \
+    || violations+="the receiver (or its manager) restarted;"
+  record "$t0" "$t1" 0.05
+}
+expect console_malformed "2 s of malformed datagrams at twice the console rate (random, short, wrong magic/version/type/size, bad or foreign tags): every one rejected and counted on /diagnostics, the real stream keeps its rate, no hold, no set-point jump, the receiver keeps running" "packets"
+hostile malformed 2.0 $((2 * rate))
+
+expect console_replay "2 s of the captured (valid) console packets re-sent at the console rate: rejected by the sequence check (duplicate/out_of_order), counted; real stream keeps its rate, no hold, no jump, receiver keeps running" "packets"
+hostile replay 2.0 "$rate"
+
+expect console_flood "3 s of replayed + malformed datagrams at 10x the console rate: counted as rejected (the socket may drop some), the real stream keeps its rate (or holds <= 50 ms), no set-point jump, the receiver keeps running" "packets"
+hostile flood 3.0 $((10 * rate))
+
 expect arm_sim_kill "left arm simulator killed (respawns at its initial pose): collision distance of the left tool unknown (NaN) while no pose, teleoperation holds; resume only through the clutch, from the measured pose (< 1 mm); right arm unaffected; reported" "resume right diag unknown"
 kill_respawning /mesa_left/saras_arm_sim 'saras_arm_sim: mesa_left on' "arm simulator"
 sleep 10; record "$t0" "$t1" 0.05
