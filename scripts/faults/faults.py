@@ -292,7 +292,8 @@ def judge_packets(out, ev, r, bad, sp, sp_r):
     """Hostile console datagrams: counted as rejected, the real stream keeps its rate (or the chain
     holds <= hold_limit), the set-point never jumps, the receiver survives (run.sh's violations)."""
     t_f, t_back, lim = float(ev['t_fault']), float(ev['t_back']), float(ev['hold_limit'])
-    sent = dict((x[0], int(x[1])) for x in load(out, 'sent')).get(ev['fault'], 0)
+    r.update((c, '-') for c in COLUMNS[2:-1])
+    sent = dict((x[0], int(x[1])) for x in load(out, 'sent') if x[1].isdigit()).get(ev['fault'], 0)
     link = load(out, 'link')
     a, b, pre = link_at(link, t_f - 0.05), link_at(link, t_back + 1.2, after=True), link_at(link, t_f - 6.0)
     if not (a and b and pre):
@@ -341,9 +342,12 @@ def analyse(out):
     with open(os.path.join(out, 'events.csv')) as f:
         events = list(csv.DictReader(f))
     rows, violated = [], 0
+    notes = dict((x[0], x[1]) for x in load(out, 'notes'))
     for i, ev in enumerate(events):
         nxt = float(events[i + 1]['t_fault']) if i + 1 < len(events) else float('inf')
         r, bad = judge(out, ev, nxt)
+        if notes.get(ev['fault']):
+            r['verdict'] += ': ' + notes[ev['fault']]
         rows.append(r)
         violated += bool(bad)
     lines = ['| ' + ' | '.join(COLUMNS) + ' |', '|' + '---|' * len(COLUMNS)]

@@ -33,6 +33,7 @@ echo "fault,expected,checks,t_fault,t_back,hold_limit,violations" > "$OUT/events
 # expect NAME "TEXT" CHECKS : states the expectation before the fault is injected
 expect() { name="$1"; text="$2"; checks="$3"; violations=""; echo; echo "== $name"; echo "   EXPECTED: $text"; }
 record() { echo "$name,\"$text\",$checks,$1,$2,${3:-0.05},\"$violations\"" >> "$OUT/events.csv"; }
+note() { echo "$name,\"$1\"" >> "$OUT/notes.csv"; }   # a measured outcome shown with the verdict
 
 # the master runs outside roslaunch (a roslaunch-started master would take the platform down with it)
 rosmaster --core -p "$port" > "$OUT/master.log" 2>&1 & master=$!; pids+=("$master")
@@ -127,6 +128,9 @@ t0=$(now); kill -KILL "$master"; sleep 8; t1=$(now)
 last_bag="$(ls -t "$OUT"/platform*.bag* | head -1)"
 [[ "$last_bag" == *.bag ]] || violations+="$(basename "$last_bag") not closed after the master loss;"
 grep -q "SAFE STOP" "$OUT"/launch*.log || violations+="no safe-stop message from the drivers;"
+logged_after() { local t; t="$(grep -ah "$1" "$OUT"/launch*.log | grep -o '^\[[A-Z ]*\] \[[0-9.]*\]' | grep -o '[0-9.]*' | head -1)"
+                 [ -n "$t" ] && python3 -c "print('+%.1f s' % ($t - $t0))" || echo never; }
+note "SAFE STOP logged by $(grep -ac "SAFE STOP" "$OUT"/launch*.log | awk -F: '{s+=$NF} END {print s+0}') driver(s), first $(logged_after "SAFE STOP"); recorder closed the bag $(logged_after "closing the bag"); $(basename "$last_bag") $(rosbag info "$last_bag" > /dev/null 2>&1 && echo indexed || echo "NOT indexed")"
 record "$t0" "$t1" 2.0
 
 kill -INT "$probe" 2>/dev/null; kill -INT "$launch" 2>/dev/null; sleep 5
