@@ -128,7 +128,7 @@ t0=$(now); kill -KILL "$master"; sleep 8; t1=$(now)
 last_bag="$(ls -t "$OUT"/platform*.bag* | head -1)"
 [[ "$last_bag" == *.bag ]] || violations+="$(basename "$last_bag") not closed after the master loss;"
 grep -q "SAFE STOP" "$OUT"/launch*.log || violations+="no safe-stop message from the drivers;"
-logged_after() { local t; t="$(grep -ah "$1" "$OUT"/launch*.log | grep -o '^\[[A-Z ]*\] \[[0-9.]*\]' | grep -o '[0-9.]*' | head -1)"
+logged_after() { local t; t="$(grep -ah "$1" "$OUT"/launch*.log | grep -o '\] \[[0-9.]*\]' | grep -o '[0-9.][0-9.]*' | head -1)"
                  [ -n "$t" ] && python3 -c "print('+%.1f s' % ($t - $t0))" || echo never; }
 note "SAFE STOP logged by $(grep -ac "SAFE STOP" "$OUT"/launch*.log | awk -F: '{s+=$NF} END {print s+0}') driver(s), first $(logged_after "SAFE STOP"); recorder closed the bag $(logged_after "closing the bag"); $(basename "$last_bag") $(rosbag info "$last_bag" > /dev/null 2>&1 && echo indexed || echo "NOT indexed")"
 record "$t0" "$t1" 2.0
