@@ -7,6 +7,7 @@
                                loss over its existing connections); and be the operator: press the
                                clutch of both devices for 0.2 s every 4 s (OUT/clutch.csv)
   faults.py pid NODE           PID of a ROS node (asked over its own XML-RPC API)
+  faults.py wait-link-restart OUT T0 S   time a restarted receiver first reports (counters reset)
   faults.py spoof-force SIDE S publish 1e6 N on /mesa_SIDE/contact_force at 60 Hz for S seconds
   faults.py spoof-target SIDE S publish zero-stamp targets 2 cm deeper at 500 Hz for S seconds
   faults.py analyse OUT        judge every fault of OUT/events.csv; table on stdout and OUT/faults.md;
@@ -80,6 +81,22 @@ def probe(out):
                 time.sleep(0.02)
     except KeyboardInterrupt:
         pass
+
+
+def wait_link_restart(out, t0, timeout):
+    """Print the time the probe first sees a restarted receiver's counters (received > 0, lower than
+    before t0) on /diagnostics; exit 1 after timeout s. Its log lines cannot tell: a nodelet loader's
+    output is block-buffered."""
+    end = time.time() + timeout
+    while time.time() < end:
+        rows = [(float(x[0]), int(x[2])) for x in load(out, 'link') if x[2]]
+        before = [n for t, n in rows if t <= t0]
+        for t, n in rows:
+            if t > t0 and before and 0 < n < before[-1]:
+                print('%.6f' % t)
+                return 0
+        time.sleep(0.5)
+    return 1
 
 
 def node_pid(name):
@@ -368,6 +385,8 @@ def main(argv):
         probe(argv[2])
     elif cmd == 'pid':
         node_pid(argv[2])
+    elif cmd == 'wait-link-restart':
+        return wait_link_restart(argv[2], float(argv[3]), float(argv[4]))
     elif cmd in ('spoof-force', 'spoof-target'):
         spoof(cmd[6:], argv[2], float(argv[3]))
     elif cmd == 'analyse':
