@@ -3,6 +3,7 @@
 #   make test   install what is missing, build, run every test suite
 #   make bench  every package benchmark; make bench-platform: the platform at 1 kHz/720p, CPU per process
 #   make faults build, run the platform and inject faults one by one, judge them (OUT/faults.md)
+#   make faults CLUSTER=1  (root) the faults that need the namespace cluster (console link cut, a machine gone)
 #   make cluster           (root) the platform on six machines as network namespaces, report per machine
 #   make cluster-impaired  (root) the teleoperation across impaired links: delay/loss x tanks on/bypassed
 # Everything runs with Debian's /usr/bin/python3 and ROS Noetic (see scripts/env.sh).
@@ -50,7 +51,8 @@ bench-platform: build
 	@bash scripts/bench_platform.sh "$(if $(filter command line,$(origin DURATION)),$(DURATION),60)" "$(if $(filter command line,$(origin OUT)),$(OUT),$(CURDIR)/out/bench_platform)"
 
 faults: build
-	@bash scripts/faults/run.sh "$(if $(filter command line,$(origin OUT)),$(OUT),$(CURDIR)/out/faults)"
+	@bash scripts/faults/$(if $(CLUSTER),cluster,run).sh \
+	  "$(if $(filter command line,$(origin OUT)),$(OUT),$(CURDIR)/out/faults$(if $(CLUSTER),_cluster))"
 
 lint: setup
 	@bash -c 'source scripts/env.sh && catkin_lint -W2 --strict src'

@@ -33,6 +33,7 @@ echo "fault,expected,checks,t_fault,t_back,hold_limit,violations" > "$OUT/events
 # expect NAME "TEXT" CHECKS : states the expectation before the fault is injected
 expect() { name="$1"; text="$2"; checks="$3"; violations=""; echo; echo "== $name"; echo "   EXPECTED: $text"; }
 record() { echo "$name,\"$text\",$checks,$1,$2,${3:-0.05},\"$violations\"" >> "$OUT/events.csv"; }
+note() { echo "$name,\"$1\"" >> "$OUT/notes.csv"; }   # a measured outcome shown with the verdict
 
 # the master runs outside roslaunch (a roslaunch-started master would take the platform down with it)
 rosmaster --core -p "$port" > "$OUT/master.log" 2>&1 & master=$!; pids+=("$master")
@@ -73,6 +74,30 @@ expect zero_stamp_target_spoof "zero-stamp targets 2 cm deeper at 500 Hz for 2 s
 FAULTS_SPOOF_TIMES="$OUT/spoof.txt" python3 "$F" spoof-target left 2.0 > /dev/null 2>&1; read -r t0 t1 < "$OUT/spoof.txt"
 sleep 2; record "$t0" "$t1" 0.05
 
+# console packets (loopback, no key): 1 s of the console's real, accepted state packets captured first
+P="$here/packets.py"; cport=8888
+python3 "$P" capture "$cport" 1.0 "$OUT/captured.bin" > "$OUT/captured.txt" 2>&1 || echo "   (no console packets captured)"
+echo "fault,sent" > "$OUT/sent.csv"
+# hostile KIND SECONDS RATE: send, then judge the receiver's survival (same process, no respawn)
+hostile() {
+  local before_r before_m out; before_r="$(pid_of /touchball_receiver)"; before_m="$(pid_of /teleop/teleop_manager)"
+  out="$(python3 "$P" "$1" "$cport" "$2" "$3" "$OUT/captured.bin" 2>> "$OUT/packets.log")"
+  read -r t0 t1 sent <<< "${out:-0 0 0}"; [ "$t0" = 0 ] && { t0=$(now); t1=$t0; violations+="nothing sent;"; }
+  echo "$name,$sent" >> "$OUT/sent.csv"
+  sleep 3
+  [ -n "$before_r" ] && [ "$(pid_of /touchball_receiver)" = "$before_r" ] && [ "$(pid_of /teleop/teleop_manager)" = "$before_m" ] \
+    || violations+="the receiver (or its manager) restarted;"
+  record "$t0" "$t1" 0.05
+}
+expect console_malformed "2 s of malformed datagrams at twice the console rate (random, short, wrong magic/version/type/size, bad or foreign tags): every one rejected and counted on /diagnostics, the real stream keeps its rate, no hold, no set-point jump, the receiver keeps running" "packets"
+hostile malformed 2.0 $((2 * rate))
+
+expect console_replay "2 s of the captured (valid) console packets re-sent at the console rate: rejected by the sequence check (duplicate/out_of_order), counted; real stream keeps its rate, no hold, no jump, receiver keeps running" "packets"
+hostile replay 2.0 "$rate"
+
+expect console_flood "3 s of replayed + malformed datagrams at 10x the console rate: counted as rejected (the socket may drop some), the real stream keeps its rate (or holds <= 50 ms), no set-point jump, the receiver keeps running" "packets"
+hostile flood 3.0 $((10 * rate))
+
 expect arm_sim_kill "left arm simulator killed (respawns at its initial pose): collision distance of the left tool unknown (NaN) while no pose, teleoperation holds; resume only through the clutch, from the measured pose (< 1 mm); right arm unaffected; reported" "resume right diag unknown"
 kill_respawning /mesa_left/saras_arm_sim 'saras_arm_sim: mesa_left on' "arm simulator"
 sleep 10; record "$t0" "$t1" 0.05
@@ -93,9 +118,12 @@ expect collision_kill "collision monitoring killed: reported on /diagnostics, se
 p="$(pid_of /colliding_regions)"; t0=$(now); kill -KILL "$p"; sleep 6; t1=$(now); record "$t0" "$t1"
 
 expect manager_kill "teleop manager killed (respawns with its nodelets): both arms hold; tanks restart at T_min; resume only through the clutch, jump < 1 mm; the platform keeps running" "hold resume diag"
-p="$(pid_of /teleop/teleop_manager)"; t0=$(now); kill -KILL "$p"; sleep 15; t1=$(now)
+# back: the respawned receiver reports again on /diagnostics (its nodelets restart with it)
+p="$(pid_of /teleop/teleop_manager)"; t0=$(now); kill -KILL "$p"
+t1="$(python3 "$F" wait-link-restart "$OUT" "$t0" 90)" || { violations+="the receiver not back within 90 s;"; t1=$(now); }
+note "receiver back on /diagnostics $(python3 -c "print('+%.1f s' % ($t1 - $t0))") after the kill"
 kill -0 "$launch" 2>/dev/null || violations+="the platform shut down (a required node died with the manager);"
-sleep 8; record "$t0" "$t1" 0.1
+sleep 12; record "$t0" "$t1" 0.1
 if ! kill -0 "$launch" 2>/dev/null; then echo "   (platform shut down: started again for the next fault)"; start_platform _2; fi
 
 expect master_kill "ROS master killed: the drivers stop forwarding (arms hold <= 2 s, no motion), the recorder closes an indexed bag, clear errors" "hold"
@@ -103,6 +131,9 @@ t0=$(now); kill -KILL "$master"; sleep 8; t1=$(now)
 last_bag="$(ls -t "$OUT"/platform*.bag* | head -1)"
 [[ "$last_bag" == *.bag ]] || violations+="$(basename "$last_bag") not closed after the master loss;"
 grep -q "SAFE STOP" "$OUT"/launch*.log || violations+="no safe-stop message from the drivers;"
+logged_after() { local t; t="$(grep -ah "$1" "$OUT"/launch*.log | grep -o '\] \[[0-9.]*\]' | grep -o '[0-9.][0-9.]*' | head -1)"
+                 [ -n "$t" ] && python3 -c "print('+%.1f s' % ($t - $t0))" || echo never; }
+note "SAFE STOP logged by $(grep -ac "SAFE STOP" "$OUT"/launch*.log | awk -F: '{s+=$NF} END {print s+0}') driver(s), first $(logged_after "SAFE STOP"); recorder closed the bag $(logged_after "closing the bag"); $(basename "$last_bag") $(rosbag info "$last_bag" > /dev/null 2>&1 && echo indexed || echo "NOT indexed")"
 record "$t0" "$t1" 2.0
 
 kill -INT "$probe" 2>/dev/null; kill -INT "$launch" 2>/dev/null; sleep 5
