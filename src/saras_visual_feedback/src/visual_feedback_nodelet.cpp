@@ -383,7 +383,9 @@ void VisualFeedbackNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   stat.addf("rejected distance arrays", "%llu", static_cast<unsigned long long>(sc.rejected_distances));
   stat.addf("pose history restarts", "%llu", static_cast<unsigned long long>(sc.history_restarts));
   stat.add("compressed stream", own_jpeg_ ? "visual_feedback" : "image_transport");
-  const double age = last_ns > 0 ? (now.toNSec() - last_ns) * 1e-9 : std::numeric_limits<double>::infinity();
+  // signed: an image may arrive between `now` and reading its counter (a negative age is 0, not 584 years)
+  const double age = last_ns > 0 ? std::max<std::int64_t>(0, static_cast<std::int64_t>(now.toNSec()) - last_ns) * 1e-9
+                                 : std::numeric_limits<double>::infinity();
   stat.addf("image age [s]", "%.3f", age);
   if (!subscribed)
     stat.summary(DiagnosticStatus::OK, "idle: no subscribers to the augmented images");
