@@ -11,57 +11,31 @@ recorder) counts for its nearest named ancestor; roslaunch and the master by the
 import os
 import time
 
-CLK_TCK = os.sysconf('SC_CLK_TCK')
+from saras_common import procfs
+
+CLK_TCK = procfs.CLK_TCK
+LAUNCHERS = ('roslaunch', 'rosmaster', 'roscore')   # named by their program; their children by their own
 
 
 class BudgetError(ValueError):
     """A malformed budget file."""
 
 
-def _read(path, mode='r'):
-    try:
-        with open(path, mode) as stream:
-            return stream.read()
-    except OSError:
-        return None
-
-
-def _stat(pid):
-    """(ppid, utime + stime [ticks], starttime [ticks]) of a process, None when it is gone."""
-    text = _read('/proc/%d/stat' % pid)
-    if text is None:
-        return None
-    fields = text[text.rindex(')') + 2:].split()   # after "pid (comm) "; comm may hold spaces
-    return int(fields[1]), int(fields[11]) + int(fields[12]), int(fields[19])
-
-
 def _own_name(pid):
     """The ROS name of a process (``/ns/name``), its program for roslaunch/rosmaster, else None."""
-    raw = _read('/proc/%d/cmdline' % pid, 'rb')
-    if not raw:
-        return None
-    argv = [a.decode(errors='replace') for a in raw.split(b'\0') if a]
+    argv = [a.decode(errors='replace') for a in procfs.cmdline(pid)]
     for a in argv:
         if a.startswith('__name:='):
-            env = _read('/proc/%d/environ' % pid, 'rb') or b''
-            ns = next((e[len(b'ROS_NAMESPACE='):].decode() for e in env.split(b'\0')
-                       if e.startswith(b'ROS_NAMESPACE=')), '')
+            ns = procfs.environ(pid).get(b'ROS_NAMESPACE', b'').decode(errors='replace')
             return '/' + '/'.join(p for p in ns.split('/') + [a[len('__name:='):]] if p)
-    for program in ('roslaunch', 'rosmaster', 'roscore'):
-        if any(os.path.basename(a) == program for a in argv[:3]):
-            return program
-    return None
-
-
-def _all_pids():
-    return [int(d) for d in os.listdir('/proc') if d.isdigit()]
+    return next((prog for prog in LAUNCHERS if any(os.path.basename(a) == prog for a in argv[:3])), None)
 
 
 def sample(roots):
     """CPU ticks of every process in the trees under ``roots`` (pids): {'wall': s, 'procs': [...]}."""
     stats = {}
-    for pid in _all_pids():
-        st = _stat(pid)
+    for pid in procfs.pids():
+        st = procfs.stat(pid)
         if st is not None:
             stats[pid] = st
     children = {}
@@ -70,15 +44,12 @@ def sample(roots):
     procs, stack = [], [(r, None) for r in roots if r in stats]
     while stack:
         pid, parent_label = stack.pop()
-        label = _own_name(pid) or parent_label or _comm(pid)
+        label = _own_name(pid) or parent_label or procfs.comm(pid)
         _, ticks, start = stats[pid]
         procs.append({'pid': pid, 'start': start, 'name': label, 'ticks': ticks})
-        stack.extend((c, label if label not in ('roslaunch',) else None) for c in children.get(pid, ()))
+        inherited = None if label == 'roslaunch' else label   # roslaunch's children are the nodes
+        stack.extend((c, inherited) for c in children.get(pid, ()))
     return {'wall': time.monotonic(), 'procs': procs}
-
-
-def _comm(pid):
-    return (_read('/proc/%d/comm' % pid) or '?').strip()
 
 
 def shares(before, after):

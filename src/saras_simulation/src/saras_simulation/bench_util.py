@@ -1,11 +1,14 @@
 """Small helpers of the saras_simulation benchmarks (bench/*.py) and tests: a free TCP port for a
-private roscore, the CPU time of a process (Linux /proc), a built executable of this package and the
-clean stop of the process groups a benchmark started."""
+private roscore, the CPU time and command lines of processes (from ``saras_common.procfs``), a built
+executable of this package and the clean stop of the process groups a benchmark started."""
 import os
 import signal
 import socket
 import subprocess
 import time
+
+from saras_common import procfs
+from saras_common.procfs import cpu_seconds  # noqa: F401 (the benchmarks' CPU time of a process)
 
 
 def free_port():
@@ -15,16 +18,6 @@ def free_port():
     port = s.getsockname()[1]
     s.close()
     return port
-
-
-def cpu_seconds(pid):
-    """User + system CPU time [s] of process ``pid``, or None when it is gone."""
-    try:
-        with open('/proc/%d/stat' % pid) as f:
-            fields = f.read().rsplit(')', 1)[1].split()
-    except OSError:
-        return None
-    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
 def find_devel_executable(name, package='saras_simulation'):
@@ -61,14 +54,10 @@ def stop_process_groups(procs, timeout=10.0):
 
 def process_cmdlines():
     """(pid, [argv bytes]) of every process readable in /proc."""
-    for d in os.listdir('/proc'):
-        if not d.isdigit():
-            continue
-        try:
-            with open('/proc/%s/cmdline' % d, 'rb') as f:
-                yield int(d), f.read().split(b'\0')
-        except OSError:
-            continue
+    for pid in procfs.pids():
+        args = procfs.cmdline(pid)
+        if args:
+            yield pid, args
 
 
 def best_us(fn, n, repeat):
