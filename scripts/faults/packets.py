@@ -24,7 +24,11 @@ import struct
 import sys
 import time
 
-MAGIC, VERSION, TYPE_STATE, STATE_SIZE, TAG = b'TBAL', 2, 1, 180, 16
+from saras_drivers import touchball_protocol as tp
+from saras_drivers.touchball_protocol import MAGIC, STATE_SIZE, TYPE_STATE, VERSION
+from saras_drivers.touchball_protocol import TAG_SIZE as TAG
+
+SEQ_OFFSET = struct.calcsize('<4sBBH')   # tp.HEADER: magic, version, type, size, then seq (u32)
 ETH_P_ALL, PACKET_OUTGOING = 0x0003, 4
 
 
@@ -85,10 +89,8 @@ def _with(p, offset, value):
 
 def _other_key_state(rng, p):
     """A well-formed state packet (fresh seq) signed with a key that is not the deployment's."""
-    import hashlib
-    import hmac
-    body = _with(p[:-TAG], 8, struct.pack('<I', rng.getrandbits(32)))
-    return body + hmac.new(bytes(rng.getrandbits(8) for _ in range(32)), body, hashlib.sha256).digest()[:TAG]
+    body = _with(p[:-TAG], SEQ_OFFSET, struct.pack('<I', rng.getrandbits(32)))
+    return tp.Mac(bytes(rng.getrandbits(8) for _ in range(32))).sign(body)
 
 
 MALFORMED = (
@@ -100,8 +102,8 @@ MALFORMED = (
     ('type', lambda rng, p: _with(p, 5, b'\x02')),
     ('size', lambda rng, p: p[:rng.randint(6, STATE_SIZE - 1)]),
     ('bad_tag', lambda rng, p: p[:-TAG] + bytes(rng.getrandbits(8) for _ in range(TAG))),
-    ('changed_field', lambda rng, p: _with(p, 8, struct.pack('<I', (struct.unpack_from('<I', p, 8)[0] + 1000)
-                                                             & 0xFFFFFFFF))),
+    ('changed_field', lambda rng, p: _with(p, SEQ_OFFSET, struct.pack(
+        '<I', (struct.unpack_from('<I', p, SEQ_OFFSET)[0] + 1000) & 0xFFFFFFFF))),
     ('other_key', _other_key_state),
 )
 
