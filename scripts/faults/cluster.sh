@@ -35,11 +35,8 @@ teardown() {
 }
 trap teardown EXIT
 trap 'echo "faults (cluster): interrupted"; exit 130' INT TERM
-now() { python3 -c 'import time; print("%.6f" % time.time())'; }
-echo "fault,expected,checks,t_fault,t_back,hold_limit,violations" > "$OUT/events.csv"
-expect() { name="$1"; text="$2"; checks="$3"; violations=""; echo; echo "== $name"; echo "   EXPECTED: $text"; }
-record() { echo "$name,\"$text\",$checks,$1,$2,${3:-0.05},\"$violations\"" >> "$OUT/events.csv"; }
-note() { echo "$name,\"$1\"" >> "$OUT/notes.csv"; }   # a measured outcome shown with the verdict
+# shellcheck disable=SC1091
+source "$here/lib.sh"   # now, expect, record, note, judge_bags
 link() { ip -n "$(eval echo "\$SARAS_NS_$1")" link set eth0 "$2"; }   # link ROLE up|down
 ns_pids_of() {  # ROLE PATTERN: processes of ROLE's namespace whose command line matches PATTERN
   local p; for p in $(ip netns pids "$(eval echo "\$SARAS_NS_$1")"); do
@@ -82,11 +79,4 @@ sleep 14; record "$t0" "$t1" 0.05
 
 kill -INT "$probe" 2>/dev/null
 stop_pid "$launch" roslaunch "$OUT/platform.bag.active"
-bag="platform.bag NOT readable"
-rosbag info "$OUT/platform.bag" > "$OUT/platform.bag.info.txt" 2>&1 && bag="platform.bag readable ($(grep -m1 '^messages' "$OUT/platform.bag.info.txt" | tr -s ' '))"
-[ -f "$OUT/platform.bag.active" ] && bag+="; unindexed platform.bag.active"
-echo; echo "bags: $bag"
-python3 "$F" analyse "$OUT"; rc=$?
-echo "" >> "$OUT/faults.md"; echo "Recordings (rosbag info): $bag" >> "$OUT/faults.md"
-[[ "$bag" == *NOT* || "$bag" == *unindexed* ]] && rc=1
-exit $rc
+judge_bags; exit $?

@@ -27,13 +27,9 @@ cleanup() { for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null; done; sleep 2
             rm -rf "$SARAS_KEY_DIR"
             [ -n "${tiny:-}" ] && { umount -l "$tiny" 2>/dev/null; rmdir "$tiny" 2>/dev/null; }; }
 trap cleanup EXIT
-now() { python3 -c 'import time; print("%.6f" % time.time())'; }
+# shellcheck disable=SC1091
+source "$here/lib.sh"   # now, expect, record, note, judge_bags
 pid_of() { python3 "$F" pid "$1" 2>/dev/null; }
-echo "fault,expected,checks,t_fault,t_back,hold_limit,violations" > "$OUT/events.csv"
-# expect NAME "TEXT" CHECKS : states the expectation before the fault is injected
-expect() { name="$1"; text="$2"; checks="$3"; violations=""; echo; echo "== $name"; echo "   EXPECTED: $text"; }
-record() { echo "$name,\"$text\",$checks,$1,$2,${3:-0.05},\"$violations\"" >> "$OUT/events.csv"; }
-note() { echo "$name,\"$1\"" >> "$OUT/notes.csv"; }   # a measured outcome shown with the verdict
 
 # the master runs outside roslaunch (a roslaunch-started master would take the platform down with it)
 rosmaster --core -p "$port" > "$OUT/master.log" 2>&1 & master=$!; pids+=("$master")
@@ -137,14 +133,4 @@ note "SAFE STOP logged by $(grep -ac "SAFE STOP" "$OUT"/launch*.log | awk -F: '{
 record "$t0" "$t1" 2.0
 
 kill -INT "$probe" 2>/dev/null; kill -INT "$launch" 2>/dev/null; sleep 5
-bag=""
-for b in "$OUT"/platform*.bag; do
-  if rosbag info "$b" > "$b.info.txt" 2>&1; then bag+="$(basename "$b") readable ($(grep -m1 '^messages' "$b.info.txt" | tr -s ' ')); "
-  else bag+="$(basename "$b") NOT readable; "; fi
-done
-ls "$OUT"/*.bag.active > /dev/null 2>&1 && bag+="unindexed: $(cd "$OUT" && ls ./*.bag.active);"
-echo; echo "bags: $bag"
-python3 "$F" analyse "$OUT"; rc=$?
-echo "" >> "$OUT/faults.md"; echo "Recordings (rosbag info): $bag" >> "$OUT/faults.md"
-[[ "$bag" == *NOT* || "$bag" == *unindexed* ]] && rc=1
-exit $rc
+judge_bags; exit $?
