@@ -133,7 +133,6 @@ class ScriptedMotion(object):
                   (t % self.clutch_period) > self.clutch_period - self.clutch_duration)
         return Intention(pos, q, clip, clutch, clip > 0.9)
 
-
     def _path_time(self, t, servoed, b):
         """Time along the Lissajous path [s]: console time, or with a servo watching the tool
         ``pace`` times as fast and slowed to a stop during a dip (the surgeon presses, then goes on)."""
