@@ -113,7 +113,7 @@ record "$t0" "$t1"
 expect collision_kill "collision monitoring killed: reported on /diagnostics, set-point speed <= 20 % of 50 mm/s; right arm unaffected" "slow right diag"
 p="$(pid_of /colliding_regions)"; t0=$(now); kill -KILL "$p"; sleep 6; t1=$(now); record "$t0" "$t1"
 
-expect manager_kill "teleop manager killed (respawns with its nodelets): both arms hold; tanks restart at T_min; resume only through the clutch, jump < 1 mm; the platform keeps running" "hold resume diag"
+expect manager_kill "teleop manager killed (respawns with its nodelets): both arms hold; tanks resume with at most the energy they had (journal); resume only through the clutch, jump < 1 mm; the platform keeps running" "hold resume diag tanks"
 # back: the respawned receiver reports again on /diagnostics (its nodelets restart with it)
 p="$(pid_of /teleop/teleop_manager)"; t0=$(now); kill -KILL "$p"
 t1="$(python3 "$F" wait-link-restart "$OUT" "$t0" 90)" || { violations+="the receiver not back within 90 s;"; t1=$(now); }

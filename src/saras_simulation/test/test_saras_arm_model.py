@@ -165,3 +165,40 @@ def test_quaternion_matrix_round_trip():
         q /= np.linalg.norm(q)
         q = q if q[3] >= 0 else -q
         assert np.allclose(matrix_to_quat(quat_to_matrix(q)), q, atol=1e-12)
+
+
+@pytest.mark.parametrize('side', ['left', 'right'])
+@pytest.mark.parametrize('dt', [0.002, 0.1])
+def test_tip_speed_limit_on_a_far_target(side, dt):
+    """A target far from the arm (a late set-point, a stalled commander) is approached at the
+    controller's tool-tip speed limit, not at the motors' speed; it is still reached."""
+    limit = 0.05
+    free = SarasArmModel(sak.load(side, PA), max_velocity=1.0, insertion_ratio=0.05)
+    m = SarasArmModel(sak.load(side, PA), max_velocity=1.0, insertion_ratio=0.05, max_tip_speed=limit)
+    rng = np.random.RandomState(5)
+    fastest = 0.0
+    for _ in range(3):
+        _, t = _reachable(m, rng)
+        m.set_target(t[:3, 3])
+        free.q = m.q.copy()
+        free.set_target(t[:3, 3])
+        free.step(dt)
+        fastest = max(fastest, np.linalg.norm(free.tip_in_base()[:3, 3] - m.tip_in_base()[:3, 3]) / dt)
+        peak = 0.0
+        for _ in range(int(30.0 / dt)):
+            before = m.tip_in_base()[:3, 3]
+            m.step(dt)
+            peak = max(peak, np.linalg.norm(m.tip_in_base()[:3, 3] - before) / dt)
+            if not m.moving:
+                break
+        assert not m.moving
+        assert np.linalg.norm(m.tip_in_base()[:3, 3] - t[:3, 3]) < 1e-9
+        assert limit * 0.9 < peak <= limit * (1 + 1e-6)    # the limit holds, and is used ...
+    assert fastest > 1.5 * limit           # ... where the motors alone would have been faster
+
+
+def test_tip_speed_limit_validated():
+    with pytest.raises(ValueError):
+        SarasArmModel(sak.load('left', PA), max_tip_speed=0.0)
+    with pytest.raises(ValueError):
+        SarasArmModel(sak.load('left', PA), max_tip_speed=float('nan'))

@@ -5,7 +5,10 @@ SARAS Adapter's instrument roll and jaw. The passive Positioning Arm is fixed du
 setup pose places the RCM). Joint motion is velocity-limited and synchronised: every step, the five
 positioning joints advance toward their target along a straight line in joint space at the largest
 speed for which no motor exceeds its limit (revolute motors: ``max_velocity`` [rad/s]; insertion:
-``max_velocity * insertion_ratio`` [m/s]). The jaw moves on its own toward its target at
+``max_velocity * insertion_ratio`` [m/s]), and (``max_tip_speed``) no faster than that [m/s] at the
+tool tip, as the controller's Cartesian speed limit: a target far from the arm (after a stall of
+its commander, a late set-point) is approached at that speed, never at the motors' full speed.
+The jaw moves on its own toward its target at
 ``jaw_velocity`` [rad/s] (opening the clip neither slows nor waits for the arm's motion).
 Integration sub-steps are at most ``1 / min_rate`` seconds (default 500 Hz).
 
@@ -69,11 +72,12 @@ class SarasArmModel(object):
     :param min_depth: the tip must be at least this far [m] inside the trocar (along the
         neutral shaft axis); closer or outside => ``rcm_violation``.
     :param jaw_velocity: jaw speed limit [rad/s] (independent of ``max_velocity``).
+    :param max_tip_speed: tool-tip speed limit [m/s] (None: only the motor limits).
     """
 
     def __init__(self, kin, max_velocity=1.0, max_velocity_limit=3.0, insertion_ratio=0.05,
                  rcm_axis_tolerance=math.pi / 2, position_tolerance=1e-6, min_rate=500.0,
-                 min_depth=0.01, initial_joints=None, jaw_velocity=2.0):
+                 min_depth=0.01, initial_joints=None, jaw_velocity=2.0, max_tip_speed=None):
         if not 0.0 < max_velocity <= max_velocity_limit:
             raise ValueError('max_velocity must be in (0, max_velocity_limit], got %r' % max_velocity)
         if not insertion_ratio > 0.0:
@@ -81,6 +85,10 @@ class SarasArmModel(object):
         if not (math.isfinite(jaw_velocity) and jaw_velocity > 0.0):
             raise ValueError('jaw_velocity must be > 0 rad/s')
         self.jaw_velocity = float(jaw_velocity)
+        if max_tip_speed is not None and not (math.isfinite(max_tip_speed) and max_tip_speed > 0.0):
+            raise ValueError('max_tip_speed must be > 0 m/s (or None), got %r' % (max_tip_speed,))
+        self.max_tip_speed = None if max_tip_speed is None else float(max_tip_speed)
+        self._tip_cache = (None, None)     # (joints, tip position in the RCM frame)
         if not min_rate >= 500.0:
             raise ValueError('min_rate must be >= 500 Hz')
         self.kin = kin
@@ -214,8 +222,33 @@ class SarasArmModel(object):
                 q = target
                 break                  # reached: the remaining sub-steps would not move
             q = [x + e / scale for x, e in zip(q, err)]
+        if self.max_tip_speed is not None:
+            q = self._limit_tip_speed(q, self.max_tip_speed * dt)
         self.q[:IDX_JAW] = q
         return self.moving
+
+    def _tip(self, q5):
+        """Tip position in the RCM frame for the first five joints (cached for the last one)."""
+        key = tuple(q5)
+        if self._tip_cache[0] != key:
+            full = self.q.copy()
+            full[:IDX_JAW] = q5
+            self._tip_cache = (key, self.kin.tip_in_rcm(full)[:3, 3])
+        return self._tip_cache[1]
+
+    def _limit_tip_speed(self, q, reach):
+        """Shorten the step from the current joints to q (a straight line in joint space) so that the
+        tip moves at most reach [m]; a few secant iterations on the chord."""
+        q0 = self.q.tolist()[:IDX_JAW]
+        p0 = self._tip(q0)
+        frac = 1.0
+        for _ in range(4):
+            qf = [a + frac * (b - a) for a, b in zip(q0, q)]
+            d = float(np.linalg.norm(self._tip(qf) - p0))
+            if d <= reach * (1.0 + 1e-9):
+                return qf
+            frac *= reach / d
+        return [a + frac * (b - a) for a, b in zip(q0, q)]
 
     @property
     def moving(self):

@@ -23,11 +23,21 @@
  * tank_slave gates every contact force (ForceGate: ~max_contact_force [N], ~max_contact_force_step
  * [N] + ~max_contact_force_rate [N/s] * dt, non-finite): a violation zeroes the channel's action and
  * measurement for ~contact_force_hold_time [s] (the arm holds) and is reported (ERROR, counters).
- * A tank restarted under the same ROS master (respawn) starts at T_min, never with fresh energy.
+ * A tank restarted under the same ROS master (respawn) never comes back with fresh energy: with
+ * ~energy_journal_dir (default /dev/shm; '' = off) it resumes with exactly the energy of its last
+ * completed step before it died (EnergyJournal, a memory-mapped file bound to this master session by
+ * the token in ~journal_token), otherwise (no journal, another session, unreadable) at T_min.
  */
 #ifndef SARAS_TELEOP_TANK_NODE_H
 #define SARAS_TELEOP_TANK_NODE_H
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,6 +50,7 @@
 #include <std_msgs/Float64.h>
 
 #include "node_common.h"
+#include "saras_teleop/energy_journal.h"
 #include "saras_teleop/energy_tank.h"
 #include "saras_teleop/force_gate.h"
 #include "saras_common/message_pool.h"
@@ -127,13 +138,7 @@ public:
       g.hold_time = prm.number("contact_force_hold_time", g.hold_time, "s", { positive() });
     }
     g.timeout = input_timeout_;
-    if (restartedUnderThisMaster(pnh))
-    {
-      // a respawned tank must not come back with more energy than it had: start empty (T_min)
-      ROS_WARN("%s: restarted under the same ROS master: tank starts at T_min %.2f J (not T_init %.2f J)",
-               Traits::kName, p.T_min, p.T_init);
-      p.T_init = std::nextafter(p.T_min, p.T_max);  // TankParams requires T_init > T_min
-    }
+    resume(pnh, prm.text("energy_journal_dir", "/dev/shm"), name, p);
     p.validate();  // the order of the energy levels (throws naming the parameter)
     tank_.reset(new EnergyTank(p, channels.size()));
     if (p.bypass)
@@ -172,6 +177,46 @@ public:
   }
 
 private:
+  /// A fresh start takes T_init and a new journal session; a restart (same master) the journal's
+  /// energy of this session, or T_min without one. The journal then records every step.
+  void resume(ros::NodeHandle& pnh, const std::string& dir, const std::string& name, TankParams& p)
+  {
+    const bool restarted = restartedUnderThisMaster(pnh);
+    std::string token_text;
+    std::uint64_t token = 0;
+    if (restarted && pnh.getParam("journal_token", token_text))
+      token = std::strtoull(token_text.c_str(), nullptr, 16);
+    if (token == 0)
+    {
+      token = EnergyJournal::newToken();
+      char buf[17];
+      std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(token));
+      pnh.setParam("journal_token", std::string(buf));
+    }
+    double last = std::numeric_limits<double>::quiet_NaN();
+    if (!dir.empty())
+    {
+      const std::size_t key = std::hash<std::string>()(ros::master::getURI() + "|" + name);
+      char file[64];
+      std::snprintf(file, sizeof(file), "/saras_energy_%016zx", key);
+      last = journal_.open(dir + file, token);  // throws naming the file: a clear startup error
+    }
+    if (!restarted)
+      return;
+    if (std::isfinite(last) && last > p.T_min)
+    {
+      ROS_WARN("%s: restarted under the same ROS master: resuming with the energy it had, %.3f J (journal %s)",
+               Traits::kName, last, journal_.path().c_str());
+      p.T_init = std::min(last, p.T_max);
+      return;
+    }
+    // a respawned tank must not come back with more energy than it had: start empty (T_min)
+    ROS_WARN("%s: restarted under the same ROS master: no energy journal of this session%s, tank starts at "
+             "T_min %.2f J (not T_init %.2f J)",
+             Traits::kName, dir.empty() ? " (energy_journal_dir empty)" : "", p.T_min, p.T_init);
+    p.T_init = std::nextafter(p.T_min, p.T_max);  // TankParams requires T_init > T_min
+  }
+
   struct Port
   {
     std::string name;
@@ -282,6 +327,7 @@ private:
     inbox_ = 0.0;
     tank_->step(dt, pin, ext_ereq_);
     outbox_ += tank_->pout() * dt;
+    journal_.record(tank_->energy());  // one store into the mapped journal
   }
 
   void publishPort(std::size_t i, const ros::Time& stamp)
@@ -368,6 +414,7 @@ private:
 
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<EnergyTank> tank_;
+  EnergyJournal journal_;  // the energy after every step, for a restart
   std::vector<Port> ports_;
   ros::Subscriber pin_sub_, ereq_sub_;
   ros::Publisher pout_pub_, ereq_pub_, energy_pub_;
