@@ -93,4 +93,6 @@ def test_report_agreement_table_compares_known_estimates_with_the_nearest_truth(
     assert r['estimates'] == 9 and r['unknown'] == pytest.approx(1 / 9.0)
     assert r['truth_contact'] == 4 and r['known_in_contact'] == 3          # t = 10.5 .. 10.8; 10.8 unknown
     assert r['rms_mm'] == pytest.approx(math.sqrt(3 * 0.5 ** 2 / 8.0)) and r['max_true_mm'] == pytest.approx(3.0)
+    assert r['rms_contact_mm'] == pytest.approx(0.5)                       # t = 10.5 .. 10.7, 0.5 mm deeper
+    assert r['latency_ms'][0] == pytest.approx(50.0) and r['latency_ms'][1] < 250.0
     assert 'left' in contact_agreement_html(rows) and 'right' not in rows

@@ -282,18 +282,40 @@ def plot_contact_depths(data, t0):
     return fig
 
 
+def plot_tip_heights(data, t0):
+    """Signed distance of each tool tip to the simulated tissue (contact_sim's truth): working height,
+    dips, contacts below 0."""
+    series = dict((s, [(t - t0, 1e3 * m.data[3]) for t, m in data.get('/mesa_%s/contact_truth_tip' % s, [])
+                       if len(m.data) > 3]) for s in SIDES)
+    if not any(series.values()):
+        return None
+    fig, ax = plt.subplots(figsize=(9, 3))
+    for side, rows in sorted(series.items()):
+        if rows:
+            ax.plot([t for t, _ in rows], [d for _, d in rows], lw=1.0, label=side)
+    ax.axhline(0.0, color='k', lw=0.8)
+    ax.set_ylabel('tip above tissue [mm]')
+    ax.set_xlabel('time [s]')
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc='upper right')
+    return fig
+
+
 def contact_agreement(data, max_age=0.1):
-    """Per side: estimates, unknown share, contact frames of the truth, and the depth error of the known
-    estimates against the truth recorded nearest their image stamp (within ``max_age`` s)."""
+    """Per side: estimates, unknown share, contact frames of the truth, the depth error of the known
+    estimates against the truth recorded nearest their image stamp (within ``max_age`` s), over all of
+    them and over those in true contact, and the latency from the image stamp to the estimate's
+    recording."""
     rows = {}
     for side in SIDES:
         truth = data.get('/mesa_%s/contact_truth' % side, [])
-        est = [m.data for _, m in data.get('/mesa_%s/contact_estimate' % side, []) if len(m.data) > 4]
+        timed = [(t, m.data) for t, m in data.get('/mesa_%s/contact_estimate' % side, []) if len(m.data) > 4]
+        est = [d for _, d in timed]
         if not truth or not est:
             continue
         tt = np.array([t for t, _ in truth])
         td = np.array([m.depth for _, m in truth])
-        err, known_in_contact, in_contact = [], 0, 0
+        err, err_contact, known_in_contact, in_contact = [], [], 0, 0
         for d in est:
             i = int(np.clip(np.searchsorted(tt, d[0]), 1, len(tt) - 1))
             i = i - 1 if abs(tt[i - 1] - d[0]) < abs(tt[i] - d[0]) else i
@@ -303,12 +325,18 @@ def contact_agreement(data, max_age=0.1):
             if d[1] > 0.5:
                 err.append(d[2] - td[i])
                 known_in_contact += td[i] > 0
+                if td[i] > 0:
+                    err_contact.append(d[2] - td[i])
         e = np.abs(np.array(err))
+        ec = np.abs(np.array(err_contact))
+        lat = np.array([t - d[0] for t, d in timed])
         rows[side] = {'estimates': len(est), 'unknown': sum(d[1] <= 0.5 for d in est) / float(len(est)),
                       'truth_contact': int(in_contact), 'known_in_contact': int(known_in_contact),
                       'rms_mm': 1e3 * float(np.sqrt(np.mean(e ** 2))) if e.size else float('nan'),
                       'p95_mm': 1e3 * float(np.percentile(e, 95)) if e.size else float('nan'),
-                      'max_true_mm': 1e3 * float(td.max())}
+                      'max_true_mm': 1e3 * float(td.max()),
+                      'rms_contact_mm': 1e3 * float(np.sqrt(np.mean(ec ** 2))) if ec.size else float('nan'),
+                      'latency_ms': tuple(1e3 * float(np.percentile(lat, q)) for q in (50, 95))}
     return rows
 
 
@@ -316,12 +344,16 @@ def contact_agreement_html(rows):
     if not rows:
         return '<p class="missing">no contact truth and estimate recorded</p>'
     out = ['<tr><th>tool</th><th>estimates</th><th>unknown</th><th>deepest true contact [mm]</th>'
-           '<th>frames in true contact (known)</th><th>depth error RMS / p95 [mm]</th></tr>']
+           '<th>frames in true contact (known)</th><th>depth error RMS / p95 [mm]</th>'
+           '<th>depth error RMS in contact [mm]</th><th>latency p50 / p95 [ms]</th></tr>']
     for side, r in sorted(rows.items()):
-        out.append('<tr><td>%s</td><td>%d</td><td>%.0f %%</td><td>%.1f</td><td>%d (%d)</td><td>%.2f / %.2f</td></tr>'
+        out.append('<tr><td>%s</td><td>%d</td><td>%.0f %%</td><td>%.1f</td><td>%d (%d)</td><td>%.2f / %.2f</td>'
+                   '<td>%.2f</td><td>%.0f / %.0f</td></tr>'
                    % (side, r['estimates'], 100 * r['unknown'], r['max_true_mm'], r['truth_contact'],
-                      r['known_in_contact'], r['rms_mm'], r['p95_mm']))
-    return '<table>%s</table><p>known estimates vs the truth recorded nearest their image stamp</p>' % ''.join(out)
+                      r['known_in_contact'], r['rms_mm'], r['p95_mm'], r['rms_contact_mm'],
+                      r['latency_ms'][0], r['latency_ms'][1]))
+    return ('<table>%s</table><p>known estimates vs the truth recorded nearest their image stamp; in contact: '
+            'where the truth is in contact; latency: image stamp to the estimate\'s recording</p>' % ''.join(out))
 
 
 def contact_frame_section(rep, bag_path, out_dir, patch_radius):
@@ -396,6 +428,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     topics = ['/teleop/%s/master_pose' % s for s in SIDES] + ['/mesa_%s/ee_pose' % s for s in SIDES]
     topics += ['/mesa_%s/target_pose' % s for s in SIDES] + ['/mesa_%s/contact_force' % s for s in SIDES]
     topics += ['/mesa_%s/contact_truth' % s for s in SIDES] + ['/mesa_%s/contact_estimate' % s for s in SIDES]
+    topics += ['/mesa_%s/contact_truth_tip' % s for s in SIDES]
     topics += ['/collision/distances', '/teleop/tank_master/energy', '/teleop/tank_slave/energy']
     topics += ['/dvrk/MTMR/position_cartesian_current', '/dvrk/PSM1/position_cartesian_current']
     topics += list(PEDAL_TOPICS.values())
@@ -430,6 +463,9 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
                '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
                '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
     rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(contact_agreement(data))))
+    rep.figure('tip_heights.png', 'Tool tips above the tissue', lambda: plot_tip_heights(data, t0),
+               '/mesa_<side>/contact_truth_tip (contact_sim): signed distance of the tip to the simulated tissue; '
+               'below 0 = in contact')
     contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):

@@ -299,6 +299,10 @@ class SarasArmClient(object):
             raise TimeoutError('%s: malformed answer %r' % (event, r))
         return r
 
+    def hold(self):
+        """``hold``: the arm stops where it is (fire-and-forget; False when not connected)."""
+        return self.emit(proto.EV_HOLD, {'id': self.next_id()})
+
     def send_target(self, position, orientation=None):
         return self.emit(proto.EV_SET_TARGET,
                          proto.make_set_target(self.next_id(), position, orientation, time.time()))

@@ -14,6 +14,7 @@ import rostest
 import tf2_ros
 from geometry_msgs.msg import PointStamped, PoseStamped
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool
 from tf2_msgs.msg import TFMessage
 
 from saras_simulation.saras_arm_model import quat_to_matrix
@@ -241,6 +242,29 @@ class TestMotion(unittest.TestCase):
         self.assertAlmostEqual(self.joints[-1].position[11], 0.5, places=9)
         self.assertNotAlmostEqual(roll, 0.5)
         self.assertAlmostEqual(self.joints[-1].position[12], 0.4, places=9)
+
+    def test_7_hold_topic_stops_the_arm_where_it_is(self):
+        """The teleoperation's hold (latched /mesa_left/hold): the driver sends the protocol's hold,
+        the arm stops short of its last target and ignores targets until the hold ends."""
+        hold = rospy.Publisher(NS + 'hold', Bool, queue_size=1, latch=True)
+        self.addCleanup(hold.publish, Bool(False))
+        start = self.tip()[0]
+        goal = self.target_from_current(0.3, 0.15)
+        self.send(goal)
+        time.sleep(0.3)                                   # on its way (tip speed limit 50 mm/s)
+        hold.publish(Bool(True))
+        time.sleep(0.5)
+        stopped = self.tip()[0]
+        for _ in range(10):                               # targets while held: ignored
+            self.send(goal)
+            time.sleep(0.05)
+        time.sleep(0.3)
+        self.assertLess(np.linalg.norm(self.tip()[0] - stopped), 1e-6, 'the arm moved while held')
+        self.assertGreater(np.linalg.norm(goal - stopped), 0.005, 'the arm reached the target: hold not tested')
+        self.assertGreater(np.linalg.norm(stopped - start), 0.001, 'the arm never moved: hold not tested')
+        hold.publish(Bool(False))
+        time.sleep(0.3)
+        self.assertTrue(self.drive_to(goal, 15.0), 'no motion after the hold ended')
 
 
 if __name__ == '__main__':

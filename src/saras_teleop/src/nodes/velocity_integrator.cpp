@@ -24,6 +24,11 @@
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  *
+ * hold (std_msgs/Bool, latched): true while the set-point is held by a fault or the clutch (FAULT,
+ * CLUTCHED), published on each change: the arm driver then stops the arm where it is instead of
+ * letting it complete the last set-point, and re-synchronises when it turns false (the set-point
+ * is re-anchored on the measured pose at the clutch release).
+ *
  * Instrument jaw (JawChannel, jaw_channel.h): the Simball clip angle of device_state -> jaw_target
  * (sensor_msgs/JointState, scaled, clamped to the jaw range, rate-limited), held whenever the
  * set-point is not commanding (FAULT, CLUTCHED, WAITING) or holds (link stale, no twist).
@@ -37,6 +42,7 @@
 #include <saras_msgs/CollisionReport.h>
 #include <saras_msgs/ComponentStatus.h>
 #include <saras_msgs/HapticDeviceState.h>
+#include <std_msgs/Bool.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "jaw_channel.h"
@@ -100,6 +106,7 @@ public:
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", kStreamQueue);
+    hold_pub_ = nh.advertise<std_msgs::Bool>("hold", 1, true);
     start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
@@ -148,7 +155,9 @@ private:
       return;
     jaw_->onDevice(*m);
     const bool was_fault = vi_.faults() > clutch_faults_;
-    if (vi_.clutch(m->clutch) && was_fault)
+    const bool released = vi_.clutch(m->clutch);
+    publishHold();
+    if (released && was_fault)
     {
       clutch_faults_ = vi_.faults();
       ROS_INFO("velocity_integrator: clutch released after a hold: re-anchored on the measured pose, %.2f mm from "
@@ -168,6 +177,7 @@ private:
     if (vi_.mode() == VelocityIntegrator::Mode::FAULT || !vi_.started() || !engaged_)
       return;
     vi_.fault(why);
+    publishHold();  // the driver stops the arm now
     ROS_ERROR("velocity_integrator: HOLD (%s): set-point frozen, the arm holds until the operator presses and "
               "releases the clutch",
               why.c_str());
@@ -225,8 +235,22 @@ private:
     publish(stamp);
   }
 
+  /// hold topic: on each change of "held by a fault or the clutch" (latched)
+  void publishHold()
+  {
+    const bool held = vi_.started() && (vi_.mode() == VelocityIntegrator::Mode::FAULT ||
+                                         vi_.mode() == VelocityIntegrator::Mode::CLUTCHED);
+    if (hold_sent_ && held == held_)
+      return;
+    held_ = held;
+    hold_sent_ = true;
+    hold_msg_.data = held;
+    hold_pub_.publish(hold_msg_);
+  }
+
   void publish(const ros::Time& stamp)
   {
+    publishHold();
     if (!vi_.started())
       return;  // FAULT / CLUTCHED: the held set-point (the measured pose at the fault) is published
     const KDL::Frame& f = vi_.pose();
@@ -326,7 +350,9 @@ private:
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;
-  ros::Publisher pose_pub_;
+  ros::Publisher pose_pub_, hold_pub_;
+  std_msgs::Bool hold_msg_;
+  bool held_ = false, hold_sent_ = false;
   ros::Subscriber start_sub_, twist_sub_, link_sub_, device_sub_, collision_sub_;
   ros::SteadyTimer timer_;
   ros::Time t0_, t_twist_, t_pub_, last_stamp_, t_measured_, t_collision_;

@@ -20,7 +20,7 @@ import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, WrenchStamped
 from saras_msgs.msg import CollisionReport, ComponentStatus, HapticDeviceState
-from std_msgs.msg import Float64
+from std_msgs.msg import Bool, Float64
 
 AMP = 0.02    # master stroke along touch_left/base x [m]
 FREQ = 0.25   # [Hz]
@@ -74,6 +74,8 @@ class Fixture(object):
         rospy.Subscriber('/teleop/tank_master/energy', Float64, lambda m: self.on_energy('master', m))
         rospy.Subscriber('/teleop/tank_slave/energy', Float64, lambda m: self.on_energy('slave', m))
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics)
+        self.holds = []            # (time, data) of /mesa_left/hold (the arm driver stops the arm on true)
+        rospy.Subscriber('/mesa_left/hold', Bool, lambda m: self.holds.append((time.time(), m.data)))
         self.start_pose = PoseStamped()
         self.start_pose.header.frame_id = 'mesa_left/sbs_world'
         self.start_pose.pose.position.x, self.start_pose.pose.position.y, self.start_pose.pose.position.z = 0.3, 0.1, 0.15
@@ -276,8 +278,10 @@ class TeleopLoopTest(unittest.TestCase):
         self.assertGreater(len(held), 1000)   # still published at rate
         ys = [t[3] for t in held]
         self.assertLess(max(ys) - min(ys), 1e-9)
+        self.assertTrue(fx.holds and fx.holds[-1][1], 'hold not published while the link is stale: %s' % fx.holds)
         fx.stale = False
         time.sleep(1.5)
+        self.assertTrue(fx.holds[-1][1], 'the hold ended without the clutch')
         with fx.lock:
             still = [t[2:5] for t in fx.targets[n0:]]
         # link back, but no clutch yet: still held (resumes only through the operator's clutch)
@@ -288,6 +292,7 @@ class TeleopLoopTest(unittest.TestCase):
         with fx.lock:
             after = [t[2:5] for t in fx.targets if t[0] > release]
         self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
+        self.assertFalse(fx.holds[-1][1], 'hold still true after the clutch release')
         first = after[0]
         self.assertLess(math.dist(first, held), 1e-3)  # first set-point after recovery: the held pose
         steps = [math.dist(a, b) for a, b in zip(after, after[1:])]
