@@ -104,3 +104,21 @@ def test_jaw_guard_rejects_bad_commands_with_a_reason():
     for bad in (dict(max_age=0.0), dict(resend_period=float('nan'))):
         with pytest.raises(ValueError):
             JawGuard('mesa_left/jaw', **bad)
+
+
+def test_a_burst_of_delayed_set_points_is_not_a_fast_motion():
+    """Set-points that arrive together (a stalled host, a network burst) move as fast as their stamps
+    say: accepted; a target whose stamp interval is as short as its arrival interval is still judged."""
+    g = guard()
+    assert g.check((0.0, 0.0, 0.0), 0.0, 0.0)[0]
+    g.sent((0.0, 0.0, 0.0), 0.0)
+    now = 0.08                                   # four 40 mm/s set-points of the last 80 ms (0.8 mm apart), at once
+    for k in range(1, 5):
+        stamp = 0.02 * k
+        x = 0.04 * stamp
+        assert g.check((x, 0.0, 0.0), now - stamp, now) == (True, '')
+        g.sent((x, 0.0, 0.0), now)
+    # the same 3.2 mm jump without the stamps to justify it: too fast
+    assert g.check((x + 0.0032, 0.0, 0.0), 0.0, now + 0.001) == (False, 'speed')
+    # a forged stamp at the edge of the age window gains at most (max_age + max_future) * max_speed
+    assert g.check((x + 0.0075, 0.0, 0.0), -0.02, now + 0.001) == (False, 'speed')

@@ -7,7 +7,10 @@ trusting whichever ROS publisher sent it:
   rejection, never a bypass of the age check;
 * workspace: the position must lie in the box ``workspace_min`` .. ``workspace_max`` [m];
 * speed: a target may move at most ``max_speed * dt + step_tolerance`` [m] from the last forwarded
-  one, dt the time between them [s];
+  one, dt the time between them [s]: the larger of their arrival interval and their stamp interval,
+  so that set-points delayed together (a loaded host, a burst on the network) are not mistaken for a
+  fast motion; stamps are trusted only within the age window, so a forged stamp gains at most
+  ``(max_age + max_future) * max_speed`` once;
 * re-synchronisation: the first target after a gap longer than ``resync_gap`` [s] (start, hold,
   reconnection, see :meth:`CommandGuard.reset`) must lie within ``max_jump`` [m] of the arm's
   measured position (fresher than ``measured_timeout``); no measured position => rejected (unless
@@ -39,7 +42,8 @@ class CommandGuard(object):
         self.resync_gap, self.max_age, self.max_future = resync_gap, max_age, max_future
         self.tol, self.measured_timeout = step_tolerance, measured_timeout
         self.require_measurement = bool(require_measurement)
-        self.last = None            # (t, position) of the last forwarded target
+        self.last = None            # (t, position, stamp time) of the last forwarded target
+        self._stamp = None          # stamp time (monotonic) of the last target that passed check()
         self.meas = None            # (t, position) of the last measured position
         self.rejected = dict((r, 0) for r in REASONS)
         self.last_reason = ''
@@ -62,11 +66,12 @@ class CommandGuard(object):
             self.rejected[reason] += 1
             self.last_reason = reason
             return False, reason
+        self._stamp = now - stamp_age
         return True, ''
 
     def sent(self, position, now):
-        """Record a forwarded target."""
-        self.last = (now, tuple(position))
+        """Record a forwarded target (the last one that passed :meth:`check`)."""
+        self.last = (now, tuple(position), self._stamp)
 
     def _reason(self, p, age, now):
         if age is None:
@@ -78,7 +83,10 @@ class CommandGuard(object):
         if not all(lo <= x <= hi for x, lo, hi in zip(p, self.lo, self.hi)):
             return 'workspace'
         if self.last is not None and now - self.last[0] <= self.resync_gap:
-            allowed = self.max_speed * max(0.0, now - self.last[0]) + self.tol
+            dt = now - self.last[0]
+            if self.last[2] is not None:
+                dt = max(dt, (now - age) - self.last[2])
+            allowed = self.max_speed * max(0.0, dt) + self.tol
             return 'speed' if _dist(p, self.last[1]) > allowed else ''
         if self.meas is None or now - self.meas[0] > self.measured_timeout:
             return 'no_measurement' if self.require_measurement else ''
