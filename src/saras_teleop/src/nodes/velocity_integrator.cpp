@@ -24,10 +24,13 @@
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  *
- * hold (std_msgs/Bool, latched): true while the set-point is held by a fault or the clutch (FAULT,
- * CLUTCHED), published on each change: the arm driver then stops the arm where it is instead of
- * letting it complete the last set-point, and re-synchronises when it turns false (the set-point
- * is re-anchored on the measured pose at the clutch release).
+ * hold (std_msgs/Bool, latched): true from a fault until the clutch release that clears it,
+ * published on each change: the arm driver then stops the arm where it is instead of letting it
+ * complete the last set-point, and re-synchronises when it turns false (the set-point is
+ * re-anchored on the measured pose at that release, when the stopped arm's measurement has settled).
+ * A plain clutch press (no fault) keeps the hold false: the arm completes its last set-point and the
+ * release re-anchors on the measured pose as before (a quick press on a slow measurement stream
+ * would otherwise re-anchor on a pose the stopped arm has already left).
  *
  * Instrument jaw (JawChannel, jaw_channel.h): the Simball clip angle of device_state -> jaw_target
  * (sensor_msgs/JointState, scaled, clamped to the jaw range, rate-limited), held whenever the
@@ -156,7 +159,6 @@ private:
     jaw_->onDevice(*m);
     const bool was_fault = vi_.faults() > clutch_faults_;
     const bool released = vi_.clutch(m->clutch);
-    publishHold();
     if (released && was_fault)
     {
       clutch_faults_ = vi_.faults();
@@ -164,6 +166,7 @@ private:
                "the last commanded set-point; following",
                1e3 * (vi_.pose().p - last_sent_).Norm());
     }
+    publishHold();
   }
 
   void onCollision(const saras_msgs::CollisionReport::ConstPtr&)
@@ -235,11 +238,12 @@ private:
     publish(stamp);
   }
 
-  /// hold topic: on each change of "held by a fault or the clutch" (latched)
+  /// hold topic: on each change of "held by a fault", until the clutch release that clears it (latched)
   void publishHold()
   {
+    const bool pending = vi_.faults() > clutch_faults_;  // a fault not yet cleared by a clutch release
     const bool held = vi_.started() && (vi_.mode() == VelocityIntegrator::Mode::FAULT ||
-                                         vi_.mode() == VelocityIntegrator::Mode::CLUTCHED);
+                                         (vi_.mode() == VelocityIntegrator::Mode::CLUTCHED && pending));
     if (hold_sent_ && held == held_)
       return;
     held_ = held;

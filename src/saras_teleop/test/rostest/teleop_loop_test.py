@@ -293,6 +293,10 @@ class TeleopLoopTest(unittest.TestCase):
             after = [t[2:5] for t in fx.targets if t[0] > release]
         self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
         self.assertFalse(fx.holds[-1][1], 'hold still true after the clutch release')
+        n_holds = len(fx.holds)
+        fx.clutch()                                   # a plain clutch press (no fault): no hold
+        time.sleep(0.3)
+        self.assertFalse(any(h for _, h in fx.holds[n_holds:]), 'a plain clutch press raised the hold')
         first = after[0]
         self.assertLess(math.dist(first, held), 1e-3)  # first set-point after recovery: the held pose
         steps = [math.dist(a, b) for a, b in zip(after, after[1:])]
