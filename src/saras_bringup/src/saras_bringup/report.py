@@ -9,6 +9,7 @@ the table of recorded topics. A plot whose topics are absent from the bag is lis
 instead of silently disappearing.
 """
 import html
+import json
 import os
 
 import numpy as np
@@ -462,7 +463,10 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
                '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
                '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
-    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(contact_agreement(data))))
+    agreement = contact_agreement(data)
+    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(agreement)))
+    with open(os.path.join(out_dir, 'contact.json'), 'w') as stream:     # for tests and scripts
+        json.dump(agreement, stream, indent=1)
     rep.figure('tip_heights.png', 'Tool tips above the tissue', lambda: plot_tip_heights(data, t0),
                '/mesa_<side>/contact_truth_tip (contact_sim): signed distance of the tip to the simulated tissue; '
                'below 0 = in contact')
