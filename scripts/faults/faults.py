@@ -299,45 +299,61 @@ def judge(out, ev, nxt_t):
         bad.append('nothing reported on /diagnostics')
     if 'unknown' in keys and coll and not all(math.isnan(c) for c in coll):
         bad.append('collision distance stayed finite (stale green) while the pose was missing')
-    if 'spoof' in keys:      # the arm never follows the spoofed targets (2 cm deeper): it stays on the
-        # path of the real set-points of the last SPOOF_LAG s (the arm follows them with its own lag)
-        dev = max((min((math.dist(p, q) for _, q in window(sp, t - SPOOF_LAG, t + 1e-6)), default=0.0)
-                   for t, p in window(ee, t_f, t_back)), default=0.0)
-        r['arm motion after hold [mm]'] = 'max %.2f from the real set-points' % (1e3 * dev)
-        if dev > 0.004:
-            bad.append('arm %.1f mm away from the real set-points' % (1e3 * dev))
-    if 'tanks' in keys:      # a restarted tank never has more energy than before the fault, and is not emptied
-        notes = []
-        for tank in ('master', 'slave'):
-            e = [(float(x[0]), float(x[1])) for x in load(out, 'tank_' + tank)]
-            before = at(e, t_f)
-            gap = [b for a, b in zip(e, e[1:]) if t_f <= b[0] and b[0] - a[0] > 0.5]   # the first sample after the outage
-            if not before or not gap:
-                bad.append('tank_%s: no energy before the fault or no restart seen' % tank)
-                continue
-            notes.append('%s %.4f -> %.4f J' % (tank, before[1], gap[0][1]))
-            # (the last published energy is up to one step older than the death: TANK_STEP_J may enter)
-            if gap[0][1] > before[1] + TANK_STEP_J:
-                bad.append('tank_%s came back with more energy (%.4f > %.4f J)' % (tank, gap[0][1], before[1]))
-        r['resumed after [s]'] = '%s (tanks %s)' % (r['resumed after [s]'], ', '.join(notes))
-    if 'slow' in keys:       # degraded: set-point speed <= 20 % of 50 mm/s (+ margin); the arm's shown
-        # (without the re-anchoring on each clutch press: the set-point then jumps to the measured pose)
-        sp_stamp = dict((float(x[0]), float(x[1])) for x in load(out, 'target_' + side))
-        clutch = [float(x[0]) for x in load(out, 'clutch')]
-        moving = [(t, p) for t, p in sp if not any(c - 0.1 <= t <= c + 0.5 for c in clutch)]
-        # while the integrator reported the loss (the respawned collision node ends it)
-        lost = [float(d[0]) for d in load(out, 'diag') if t_f <= float(d[0]) < t_back and
-                d[2].startswith('teleop/%s/velocity_integrator' % side) and 'collision monitoring lost' in d[3]]
-        a, b = (min(lost), max(lost)) if lost else (t_f, t_f)
-        v_sp = peak_speed(moving, a, b, span=0.1, stamps=sp_stamp)
-        v = peak_speed(ee, a, b, span=0.1, stamps=ee_stamp)
-        if not lost:
-            bad.append('the loss of collision monitoring was not reported by the left velocity_integrator')
-        r['peak speed on recovery [mm/s]'] = 'set-point %.1f, arm %.1f (degraded %.1f s)' % (1e3 * v_sp, 1e3 * v, b - a)
-        if v_sp > 0.012:
-            bad.append('set-point at %.1f mm/s without collision monitoring' % (1e3 * v_sp))
+    if 'spoof' in keys:
+        check_spoof(ee, sp, t_f, t_back, r, bad)
+    if 'tanks' in keys:
+        check_tanks(out, t_f, r, bad)
+    if 'slow' in keys:
+        check_slow(out, side, sp, ee, ee_stamp, t_f, t_back, r, bad)
     r['verdict'] = 'ok' if not bad else 'VIOLATED: ' + '; '.join(bad)
     return r, bad
+
+
+def check_spoof(ee, sp, t_f, t_back, r, bad):
+    """The arm never follows spoofed targets (2 cm deeper): it stays on the path of the real
+    set-points of the last SPOOF_LAG s."""
+    # path of the real set-points of the last SPOOF_LAG s (the arm follows them with its own lag)
+    dev = max((min((math.dist(p, q) for _, q in window(sp, t - SPOOF_LAG, t + 1e-6)), default=0.0)
+               for t, p in window(ee, t_f, t_back)), default=0.0)
+    r['arm motion after hold [mm]'] = 'max %.2f from the real set-points' % (1e3 * dev)
+    if dev > 0.004:
+        bad.append('arm %.1f mm away from the real set-points' % (1e3 * dev))
+
+
+def check_tanks(out, t_f, r, bad):
+    """A restarted tank never has more energy than before the fault, and is not emptied."""
+    notes = []
+    for tank in ('master', 'slave'):
+        e = [(float(x[0]), float(x[1])) for x in load(out, 'tank_' + tank)]
+        before = at(e, t_f)
+        gap = [b for a, b in zip(e, e[1:]) if t_f <= b[0] and b[0] - a[0] > 0.5]   # the first sample after the outage
+        if not before or not gap:
+            bad.append('tank_%s: no energy before the fault or no restart seen' % tank)
+            continue
+        notes.append('%s %.4f -> %.4f J' % (tank, before[1], gap[0][1]))
+        # (the last published energy is up to one step older than the death: TANK_STEP_J may enter)
+        if gap[0][1] > before[1] + TANK_STEP_J:
+            bad.append('tank_%s came back with more energy (%.4f > %.4f J)' % (tank, gap[0][1], before[1]))
+    r['resumed after [s]'] = '%s (tanks %s)' % (r['resumed after [s]'], ', '.join(notes))
+
+
+def check_slow(out, side, sp, ee, ee_stamp, t_f, t_back, r, bad):
+    """Degraded: set-point speed <= 20 % of 50 mm/s (+ margin) while the loss is reported; the arm's shown."""
+    # (without the re-anchoring on each clutch press: the set-point then jumps to the measured pose)
+    sp_stamp = dict((float(x[0]), float(x[1])) for x in load(out, 'target_' + side))
+    clutch = [float(x[0]) for x in load(out, 'clutch')]
+    moving = [(t, p) for t, p in sp if not any(c - 0.1 <= t <= c + 0.5 for c in clutch)]
+    # while the integrator reported the loss (the respawned collision node ends it)
+    lost = [float(d[0]) for d in load(out, 'diag') if t_f <= float(d[0]) < t_back and
+            d[2].startswith('teleop/%s/velocity_integrator' % side) and 'collision monitoring lost' in d[3]]
+    a, b = (min(lost), max(lost)) if lost else (t_f, t_f)
+    v_sp = peak_speed(moving, a, b, span=0.1, stamps=sp_stamp)
+    v = peak_speed(ee, a, b, span=0.1, stamps=ee_stamp)
+    if not lost:
+        bad.append('the loss of collision monitoring was not reported by the left velocity_integrator')
+    r['peak speed on recovery [mm/s]'] = 'set-point %.1f, arm %.1f (degraded %.1f s)' % (1e3 * v_sp, 1e3 * v, b - a)
+    if v_sp > 0.012:
+        bad.append('set-point at %.1f mm/s without collision monitoring' % (1e3 * v_sp))
 
 
 def link_at(rows, t, after=False):

@@ -405,6 +405,24 @@ table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;paddin
 tr.bad{background:#fdd}tr.warn{background:#ffd}.missing{color:#a00}h2{margin-top:1.5em}"""
 
 
+def contact_sections(rep, data, t0, bag_path, out_dir, params):
+    """D7.2 Section 8 in the report: forces, estimated vs true depth (plot, table, contact.json), tip
+    heights and one endoscope frame with the estimate drawn."""
+    rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
+               '/mesa_left/contact_force, /mesa_right/contact_force')
+    rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
+               '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
+               '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
+    agreement = contact_agreement(data)
+    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(agreement)))
+    with open(os.path.join(out_dir, 'contact.json'), 'w') as stream:     # for tests and scripts
+        json.dump(agreement, stream, indent=1)
+    rep.figure('tip_heights.png', 'Tool tips above the tissue', lambda: plot_tip_heights(data, t0),
+               '/mesa_<side>/contact_truth_tip (contact_sim): signed distance of the tip to the simulated tissue; '
+               'below 0 = in contact')
+    contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
+
+
 def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=None, summary='',
                  sections=()):
     """Write the plots and index.html into ``out_dir``; returns the index path.
@@ -458,19 +476,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
         rep.sections.append(('Visual feedback colours over the run', occupancy_html(occ)))
     rep.figure('energies.png', 'Tank energies', lambda: plot_energies(data, t0, limits),
                '/teleop/tank_master/energy and /teleop/tank_slave/energy')
-    rep.figure('contact_forces.png', 'Contact forces', lambda: plot_forces(data, t0),
-               '/mesa_left/contact_force, /mesa_right/contact_force')
-    rep.figure('contact_depths.png', 'Contact depth: estimated vs true', lambda: plot_contact_depths(data, t0),
-               '/mesa_<side>/contact_estimate (stereo ContactEstimator; grey ticks: unknown) and '
-               '/mesa_<side>/contact_truth (contact_sim, the simulated tissue)')
-    agreement = contact_agreement(data)
-    rep.sections.append(('Contact depth: estimate vs truth', contact_agreement_html(agreement)))
-    with open(os.path.join(out_dir, 'contact.json'), 'w') as stream:     # for tests and scripts
-        json.dump(agreement, stream, indent=1)
-    rep.figure('tip_heights.png', 'Tool tips above the tissue', lambda: plot_tip_heights(data, t0),
-               '/mesa_<side>/contact_truth_tip (contact_sim): signed distance of the tip to the simulated tissue; '
-               'below 0 = in contact')
-    contact_frame_section(rep, bag_path, out_dir, float(find_param(params, 'patch_radius') or PATCH_RADIUS))
+    contact_sections(rep, data, t0, bag_path, out_dir, params)
     for title, rel, caption in (extras or []):
         if rel and rel.endswith('.txt') and os.path.exists(os.path.join(out_dir, rel)):
             with open(os.path.join(out_dir, rel)) as stream:
