@@ -43,13 +43,10 @@ double EnergyJournal::open(const std::string& path, std::uint64_t token)
     throw std::runtime_error("energy journal " + path + ": " + std::strerror(errno));
   struct stat st;
   const bool sized = fstat(fd, &st) == 0 && st.st_size == static_cast<off_t>(sizeof(Slot));
-  if (!sized && ftruncate(fd, 0) == 0 && ftruncate(fd, sizeof(Slot)) != 0)
-  {
-    const std::string why = std::strerror(errno);
-    ::close(fd);
-    throw std::runtime_error("energy journal " + path + ": " + why);
-  }
-  void* m = mmap(nullptr, sizeof(Slot), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+  // a file of another size is not a journal: emptied, then sized (zeroed) for one slot
+  void* m = MAP_FAILED;
+  if (sized || (ftruncate(fd, 0) == 0 && ftruncate(fd, sizeof(Slot)) == 0))
+    m = mmap(nullptr, sizeof(Slot), PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
   const std::string why = std::strerror(errno);
   ::close(fd);
   if (m == MAP_FAILED)

@@ -140,6 +140,7 @@ private:
     if (vi_.started())
       return;
     vi_.start(f, await_clutch_);
+    publishHold();  // the first (latched) state; then on each fault and clutch change
     ROS_INFO("velocity_integrator: start pose received, integrating in %s", frame_.c_str());
     if (await_clutch_)
       ROS_WARN("velocity_integrator: restarted; holding until the operator presses and releases the clutch");
@@ -254,7 +255,6 @@ private:
 
   void publish(const ros::Time& stamp)
   {
-    publishHold();
     if (!vi_.started())
       return;  // FAULT / CLUTCHED: the held set-point (the measured pose at the fault) is published
     const KDL::Frame& f = vi_.pose();
