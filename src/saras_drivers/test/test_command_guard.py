@@ -111,13 +111,13 @@ def test_a_burst_of_delayed_set_points_is_not_a_fast_motion():
     say: accepted; a target whose stamp interval is as short as its arrival interval is still judged."""
     g = guard()
     assert g.check((0.0, 0.0, 0.0), 0.0, 0.0)[0]
-    g.sent((0.0, 0.0, 0.0), 0.0)
+    g.sent((0.0, 0.0, 0.0), 0.0, 0.0)
     now = 0.08                                   # four 40 mm/s set-points of the last 80 ms (0.8 mm apart), at once
     for k in range(1, 5):
         stamp = 0.02 * k
         x = 0.04 * stamp
         assert g.check((x, 0.0, 0.0), now - stamp, now) == (True, '')
-        g.sent((x, 0.0, 0.0), now)
+        g.sent((x, 0.0, 0.0), now, stamp)
     # the same 3.2 mm jump without the stamps to justify it: too fast
     assert g.check((x + 0.0032, 0.0, 0.0), 0.0, now + 0.001) == (False, 'speed')
     # a forged stamp at the edge of the age window gains at most (max_age + max_future) * max_speed

@@ -42,8 +42,7 @@ class CommandGuard(object):
         self.resync_gap, self.max_age, self.max_future = resync_gap, max_age, max_future
         self.tol, self.measured_timeout = step_tolerance, measured_timeout
         self.require_measurement = bool(require_measurement)
-        self.last = None            # (t, position, stamp time) of the last forwarded target
-        self._stamp = None          # stamp time (monotonic) of the last target that passed check()
+        self.last = None            # (t, position, stamp time or None) of the last forwarded target
         self.meas = None            # (t, position) of the last measured position
         self.rejected = dict((r, 0) for r in REASONS)
         self.last_reason = ''
@@ -66,12 +65,12 @@ class CommandGuard(object):
             self.rejected[reason] += 1
             self.last_reason = reason
             return False, reason
-        self._stamp = now - stamp_age
         return True, ''
 
-    def sent(self, position, now):
-        """Record a forwarded target (the last one that passed :meth:`check`)."""
-        self.last = (now, tuple(position), self._stamp)
+    def sent(self, position, now, stamp_time=None):
+        """Record a forwarded target; ``stamp_time``: its stamp on the monotonic clock of ``now``
+        (check time - stamp age), None = judge the next step on arrival times only."""
+        self.last = (now, tuple(position), stamp_time)
 
     def _reason(self, p, age, now):
         if age is None:
