@@ -5,10 +5,11 @@ import signal
 import time
 import unittest
 
-import rosgraph
 import rospy
 import rostest
 from std_msgs.msg import Float32, Float64
+
+from node_util import node_pid, wait_until
 
 NODE = '/teleop/tank_slave/tank_slave'
 
@@ -22,31 +23,18 @@ class TankRespawn(unittest.TestCase):
         ereq = rospy.Publisher('/teleop/tank_slave/ext_ereq', Float32, queue_size=1)
         self.timer = rospy.Timer(rospy.Duration(0.02), lambda _: ereq.publish(Float32(1.0)))
 
-    def wait(self, cond, timeout):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end and not rospy.is_shutdown():
-            if cond():
-                return True
-            time.sleep(0.02)
-        return cond()
-
-    def pid(self):
-        api = rosgraph.Master('/tank_respawn').lookupNode(NODE)
-        import xmlrpc.client
-        return xmlrpc.client.ServerProxy(api).getPid('/tank_respawn')[2]
-
     def test_respawn_keeps_the_energy_it_had(self):
-        self.assertTrue(self.wait(lambda: len(self.samples) > 200, 20.0), 'no energy from tank_slave')
+        self.assertTrue(wait_until(lambda: len(self.samples) > 200, 20.0), 'no energy from tank_slave')
         time.sleep(1.5)             # P_const (2 W) leaves: the energy is below T_init by now
-        pid = self.pid()
+        pid = node_pid(NODE)
         os.kill(pid, signal.SIGKILL)
         t_kill = time.monotonic()
         before = [e for t, e in self.samples if t < t_kill]
         last = before[-1]
         self.assertLess(last, 15.0 - 0.5, 'the energy did not change before the kill: test cannot tell')
-        self.assertTrue(self.wait(lambda: any(t > t_kill + 0.5 for t, _ in self.samples), 20.0),
+        self.assertTrue(wait_until(lambda: any(t > t_kill + 0.5 for t, _ in self.samples), 20.0),
                         'tank_slave not respawned')
-        self.assertNotEqual(pid, self.pid())
+        self.assertNotEqual(pid, node_pid(NODE))
         first = next(e for t, e in self.samples if t > t_kill + 0.5)
         self.assertLessEqual(first, last + 1e-9, 'respawned with more energy (%.6f > %.6f J)' % (first, last))
         self.assertGreater(first, 1.0 + 0.5 * (last - 1.0), 'respawned nearly empty (%.3f J of %.3f J)'

@@ -22,6 +22,8 @@ from geometry_msgs.msg import PoseStamped, TransformStamped, Twist, WrenchStampe
 from saras_msgs.msg import CollisionReport, ComponentStatus, HapticDeviceState
 from std_msgs.msg import Bool, Float64
 
+from node_util import node_pid
+
 AMP = 0.02    # master stroke along touch_left/base x [m]
 FREQ = 0.25   # [Hz]
 SCALE = 0.5   # transparency scale_factor (config/transparency.yaml)
@@ -363,10 +365,7 @@ class TeleopLoopTest(unittest.TestCase):
         manager = rospy.get_param('~expect_manager', '')
         if not expected or not manager:
             self.skipTest('no callback thread expectation')
-        import rosgraph
-        import xmlrpc.client
-        api = rosgraph.Master('/teleop_loop_test').lookupNode(manager)
-        pid = xmlrpc.client.ServerProxy(api).getPid('/teleop_loop_test')[2]
+        pid = node_pid(manager)
 
         def cpu():
             ticks = {}
