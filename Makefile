@@ -15,7 +15,7 @@ CONTROL_RATE ?=
 ENDOSCOPE_SIZE ?=
 CLUSTER_OUT ?= $(CURDIR)/out/cluster
 IMPAIRED_OUT ?= $(CURDIR)/out/cluster_impaired
-IMPAIRED_DURATION ?= 20
+IMPAIRED_DURATION ?= 40
 CASES ?=
 
 .PHONY: all setup build test demo bench bench-platform faults lint run clean cluster cluster-impaired

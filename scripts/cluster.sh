@@ -15,6 +15,9 @@
 #                     relays (netem_relay) on the console->teleop UDP link (both directions) and the
 #                     teleop->SARAS Socket.IO links: one-way delay/jitter [ms], loss fraction (UDP),
 #                     IMPAIR_BURST=1 makes the loss bursty (Gilbert-Elliott, mean burst 4 packets)
+#   IMPAIR_ARM_DELAY_MS  one-way delay [ms] of the Socket.IO links alone (default IMPAIR_DELAY_MS)
+#   IMPAIR_CHANNEL=1   the same delay, jitter and loss also on the teleoperation's master-slave channel
+#                     between the energy tanks (teleop.launch channel_*; the two-layer design's link)
 #   BYPASS_TANKS=true  teleoperation without the passivity layer (experiments only)
 #   CUT_LINK_AT=S      cut the console link S seconds into the recording by stopping its relay
 #                     (needs an IMPAIR_* setting, e.g. IMPAIR_DELAY_MS=0; for the time-to-hold)
@@ -58,7 +61,8 @@ in_ns() { "${NETNS[@]}" exec "$@"; }
 
 # write_links FILE NAME PROTO LISTEN TARGET [SOURCE]: one netem_relay links file
 write_links() {
-  local file="$1" burst="" new=0
+  local file="$1" burst="" new=0 delay="${IMPAIR_DELAY_MS:-0}"
+  [ "$3" = tcp ] && delay="${IMPAIR_ARM_DELAY_MS:-$delay}"
   [ -f "$file" ] || new=1
   if [ "${IMPAIR_BURST:-0}" = 1 ] && [ "$3" = udp ]; then
     # mean loss pi*loss_bad with pi = p_gb/(p_gb+p_bg): p_bg 0.25 (bursts of 4), pi = IMPAIR_LOSS
@@ -71,13 +75,13 @@ write_links() {
     echo "    listen: $4"
     echo "    target: $5"
     [ -n "${6:-}" ] && echo "    source: $6"
-    echo "    delay_ms: ${IMPAIR_DELAY_MS:-0}"
+    echo "    delay_ms: $delay"
     echo "    jitter_ms: ${IMPAIR_JITTER_MS:-0}"
     if [ "$3" = udp ]; then
       if [ -n "$burst" ]; then echo "    $burst"; else echo "    loss: ${IMPAIR_LOSS:-0}"; fi
     fi
     echo "    seed: 7"
-    echo "    reverse: {delay_ms: ${IMPAIR_DELAY_MS:-0}, jitter_ms: ${IMPAIR_JITTER_MS:-0}}"
+    echo "    reverse: {delay_ms: $delay, jitter_ms: ${IMPAIR_JITTER_MS:-0}}"
   } >> "$file"
 }
 
@@ -92,10 +96,18 @@ start_relays() {
   write_links "$RUNLOG/links_teleop.yaml" teleop_to_saras_right tcp "$t:15002" "$SARAS_ADDR_saras_right:5002"
   local role
   for role in console teleop; do
-    "${NETNS[@]}" exec "${role}_pc" rosrun saras_bringup netem_relay "$RUNLOG/links_$role.yaml" --period 10 \
+    # real-time priority: the emulated network must not add this host's scheduling delays to the link
+    "${NETNS[@]}" exec "${role}_pc" chrt -r 10 rosrun saras_bringup netem_relay "$RUNLOG/links_$role.yaml" --period 10 \
       --json "$RUNLOG/relay_$role.json" >"$RUNLOG/relay_$role.log" 2>&1 &
     pids+=($!); eval "relay_${role}_pid=$!"
   done
+  if [ "${IMPAIR_CHANNEL:-0}" = 1 ]; then
+    launch_args+=(channel_delay_ms:="${IMPAIR_DELAY_MS:-0}" channel_jitter_ms:="${IMPAIR_JITTER_MS:-0}"
+                  channel_loss:="${IMPAIR_LOSS:-0}" channel_burst_length:="$([ "${IMPAIR_BURST:-0}" = 1 ] && echo 4 || echo 1)")
+    # set-points carry the master's sample time: the drivers' age limit (100 ms) plus the channel's latency
+    [ "${IMPAIR_DELAY_MS:-0}${IMPAIR_JITTER_MS:-0}" != 00 ] && launch_args+=(arm_max_target_age:="$(python3 -c \
+      "print(round(0.1 + 1.5e-3 * ($IMPAIR_DELAY_MS + ${IMPAIR_JITTER_MS:-0}), 3))")")
+  fi
   launch_args+=(console_target:="$c" console_target_port:=16000 console_listen_port:=5016
                 left_arm_host:="$t" left_arm_port:=15001 left_arm_serve_port:=5001
                 right_arm_host:="$t" right_arm_port:=15002 right_arm_serve_port:=5002)

@@ -7,13 +7,13 @@
 #   OUT/<case>/...            the cluster run (bag, bag_check, report per machine)
 #   OUT/<case>/energy.json, energy.png
 #   OUT/index.html, OUT/table.md   the table of every case and the plots
-# Usage: scripts/cluster_impaired.sh [DURATION] [OUT] [CASE ...]
+# Usage: scripts/cluster_impaired.sh [DURATION (40)] [OUT] [CASE ...]
 # Cases: <link>-<tanks>, link one of d0 d50 d200 (one-way delay, ms), loss10 (10 % random loss),
 # burst10 (10 % bursty loss, mean burst 4 packets); tanks one of tanks bypass. Default: all 10.
 # Root is required (exit 77 otherwise).
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-DURATION="${1:-20}"; OUT="${2:-$here/../out/cluster_impaired}"; shift $(( $# >= 2 ? 2 : $# ))
+DURATION="${1:-40}"; OUT="${2:-$here/../out/cluster_impaired}"; shift $(( $# >= 2 ? 2 : $# ))
 CASES=("$@")
 if [ ${#CASES[@]} = 0 ]; then
   for l in d0 d50 d200 loss10 burst10; do CASES+=("$l-tanks" "$l-bypass"); done
@@ -35,15 +35,21 @@ for s in left right; do
   for t in tank_wrench master_twist tank_twist; do
     echo "  - {topic: /teleop/$s/$t, rate: control, group: teleoperation ports, required: false}" >> "$RECORDING"
   done
+  echo "  - {topic: /mesa_$s/hold, rate: 0, group: teleoperation ports, required: false}" >> "$RECORDING"
 done
 
-case_env() {  # case_env LINK: the IMPAIR_* settings of a link condition
+# case_env LINK: the IMPAIR_* settings of a link condition. The condition applies to the console link
+# and to the teleoperation's master-slave channel between the tanks (IMPAIR_CHANNEL); the Socket.IO
+# links to the arm controllers are relayed without delay (ARM_DELAY_MS): the controllers refuse
+# set-points older than max_target_age (100 ms), so a longer robot link holds the arms by design.
+case_env() {
+  local base="IMPAIR_CHANNEL=1 IMPAIR_ARM_DELAY_MS=${ARM_DELAY_MS:-0}"
   case "$1" in
-    d0) echo "IMPAIR_DELAY_MS=0" ;;
-    d50) echo "IMPAIR_DELAY_MS=50" ;;
-    d200) echo "IMPAIR_DELAY_MS=200" ;;
-    loss10) echo "IMPAIR_DELAY_MS=0 IMPAIR_LOSS=0.1" ;;
-    burst10) echo "IMPAIR_DELAY_MS=0 IMPAIR_LOSS=0.1 IMPAIR_BURST=1" ;;
+    d0) echo "$base IMPAIR_DELAY_MS=0" ;;
+    d50) echo "$base IMPAIR_DELAY_MS=50" ;;
+    d200) echo "$base IMPAIR_DELAY_MS=200" ;;
+    loss10) echo "$base IMPAIR_DELAY_MS=0 IMPAIR_LOSS=0.1" ;;
+    burst10) echo "$base IMPAIR_DELAY_MS=0 IMPAIR_LOSS=0.1 IMPAIR_BURST=1" ;;
     *) return 1 ;;
   esac
 }

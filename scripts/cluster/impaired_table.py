@@ -13,12 +13,12 @@ import sys
 COLUMNS = [('case', '%s'), ('e0_J', '%.2f'), ('entered_J', '%.3f'), ('delivered_J', '%.3f'),
            ('net_max_J', '%.3f'), ('passive', '%s'), ('tracking_rms_mm_left', '%.2f'),
            ('tracking_rms_mm_right', '%.2f'), ('time_to_hold_s_left', '%s'), ('time_to_hold_s_right', '%s'),
-           ('robot_hold_s_left', '%s'), ('robot_hold_s_right', '%s'),
+           ('robot_hold_s_left', '%s'), ('robot_hold_s_right', '%s'), ('recorder_lag_s', '%s'),
            ('slave_travel_mm_left', '%.1f'), ('slave_travel_mm_right', '%.1f'), ('contact_max_N_left', '%.1f'), ('contact_max_N_right', '%.1f'), ('contact_s', '%.1f'),
            ('bag_check', '%s')]
 HEAD = ['case', 'E0 [J]', 'entered [J]', 'delivered [J]', 'max net out [J]', 'passive',
         'tracking RMS L [mm]', 'tracking RMS R [mm]', 'set-point hold L [s]', 'set-point hold R [s]',
-        'robot still L [s]', 'robot still R [s]', 'slave travel L [mm]', 'slave travel R [mm]', 'contact max L [N]', 'contact max R [N]',
+        'robot still L [s]', 'robot still R [s]', 'recorder lag [s]', 'slave travel L [mm]', 'slave travel R [mm]', 'contact max L [N]', 'contact max R [N]',
         'in contact L+R [s]', 'bag_check']
 
 
@@ -63,6 +63,8 @@ def main(out, cases):
         row['case'] = c
         if 'contact_s_left' in row:
             row['contact_s'] = row['contact_s_left'] + row.get('contact_s_right', 0.0)
+        lags = [row[k] for k in ('recorder_lag_s_left', 'recorder_lag_s_right') if row.get(k) is not None]
+        row['recorder_lag_s'] = max(lags) if lags else None
         row['bag_check'] = bag_check_summary(os.path.join(out, c, 'report', 'topics.json'))
         rows.append(row)
     md = ['| ' + ' | '.join(HEAD) + ' |', '|' + '---|' * len(HEAD)]

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from saras_bringup.passivity import (contact_summary, energy_balance, port_energy, port_power, time_to_hold,
-                                    tracking_error, travel)
+                                    tracking_error, travel, engaged_windows)
 
 
 def test_port_power_holds_the_latest_conjugate():
@@ -37,6 +37,25 @@ def test_tracking_error_scaled_master_vs_slave():
     rms, mx = tracking_error(master, slave, scale=1.0)
     assert mx == pytest.approx(0.095, abs=1e-9)
     assert math.isnan(tracking_error([], slave, 1.0)[0])
+
+
+def test_tracking_error_reanchors_on_the_clutch():
+    # the master moves 10 mm while clutched (1-2 s); the slave stays: a re-index, not an error
+    def m_at(t):
+        return 0.01 * t + (0.01 if t >= 2.0 else 0.01 * (t - 1.0) if t >= 1.0 else 0.0)
+    master = [(0.01 * i, (m_at(0.01 * i), 0.0, 0.0)) for i in range(300)]
+    slave = [(0.01 * i + 0.005, (0.01 * (min(0.01 * i, 1.0) + max(0.0, 0.01 * i - 2.0)), 0.0, 0.0))
+             for i in range(300)]
+    states = [(0.0, (False, False)), (1.0, (True, False)), (2.0, (False, False))]
+    windows = engaged_windows(states, 3.0)
+    assert windows == [(0.0, 1.0), (2.0, 3.0)]
+    rms, mx = tracking_error(master, slave, 1.0, windows)
+    assert mx < 2e-4
+    # without the windows the re-index counts as a 10 mm error
+    assert tracking_error(master, slave, 1.0)[1] > 0.0099
+    # a stale link ends a window as the clutch does
+    assert engaged_windows([(0.0, (False, False)), (0.5, (False, True))], 1.0) == [(0.0, 0.5)]
+    assert math.isnan(tracking_error(master, slave, 1.0, [])[0])
 
 
 def test_time_to_hold():

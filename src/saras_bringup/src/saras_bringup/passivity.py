@@ -93,22 +93,51 @@ def energy_balance(powers, e0):
             'passive': net_max <= e0 + tol, 'margin_J': e0 - net_max}
 
 
-def tracking_error(master, slave, scale):
+def engaged_windows(states, t_end):
+    """[(t0, t1)] where the operator drives the slave: none of the flags set (clutch, stale, hold).
+
+    states: [(t, (flag, ...))] in time order; the last window is closed at t_end."""
+    out, start = [], None
+    for t, flags in states:
+        engaged = not any(flags)
+        if engaged and start is None:
+            start = t
+        elif not engaged and start is not None:
+            out.append((start, t))
+            start = None
+    if start is not None and t_end > start:
+        out.append((start, t_end))
+    return out
+
+
+def tracking_error(master, slave, scale, windows=None):
     """RMS and max [m] of |scale * (master - master0) - (slave - slave0)| at the slave samples.
 
-    master, slave: [(t, (x, y, z))]; the master position is held (latest not newer)."""
+    master, slave: [(t, (x, y, z))]; the master position is held (latest not newer). Without
+    windows, master0/slave0 are the first samples. With windows [(t0, t1)] (the operator engaged,
+    :func:`engaged_windows`), only slave samples inside a window count and each window re-anchors
+    both at its first samples: a clutch re-indexes the master against the slave, as the
+    teleoperation does."""
     if not master or not slave:
         return float('nan'), float('nan')
+    if windows is None:
+        windows = [(min(master[0][0], slave[0][0]), max(master[-1][0], slave[-1][0]) + 1.0)]
     mt = [m[0] for m in master]
-    m0, s0 = master[0][1], slave[0][1]
     errs = []
-    for t, s in slave:
-        k = bisect.bisect_right(mt, t) - 1
-        if k < 0:
-            continue
-        m = master[k][1]
-        e = [scale * (m[j] - m0[j]) - (s[j] - s0[j]) for j in range(3)]
-        errs.append(math.sqrt(sum(v * v for v in e)))
+    for t0, t1 in windows:
+        anchor = None
+        for t, s in slave[bisect.bisect_left([x[0] for x in slave], t0):]:
+            if t >= t1:
+                break
+            k = bisect.bisect_right(mt, t) - 1
+            if k < 0 or mt[k] < t0:
+                continue
+            m = master[k][1]
+            if anchor is None:
+                anchor = (m, s)
+            m0, s0 = anchor
+            e = [scale * (m[j] - m0[j]) - (s[j] - s0[j]) for j in range(3)]
+            errs.append(math.sqrt(sum(v * v for v in e)))
     if not errs:
         return float('nan'), float('nan')
     return math.sqrt(sum(e * e for e in errs) / len(errs)), max(errs)
