@@ -13,11 +13,13 @@ TISSUE_Z = 0.07      # [m] flat tissue
 SCALE = 0.5          # master -> slave
 
 
-def test_without_observations_the_dip_is_open_loop():
+def test_without_observations_the_surgeon_does_not_dip():
     m = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12, servo=DipServo())
-    ref = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12)
+    path = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12, dip_period=0.0)
+    blind = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12)
     for t in (4.0, 6.0, 9.0, 12.0):
-        assert m(t).position == pytest.approx(ref(t).position)
+        assert m(t).position == pytest.approx(path(t).position)
+    assert blind(9.0).position[2] < path(9.0).position[2] - 0.05    # what a blind dip would do
 
 
 def test_stale_observation_holds_the_offsets():
@@ -59,13 +61,13 @@ def test_bad_parameters_are_rejected(kw):
         DipServo(**kw)
 
 
-def test_a_dip_begun_blind_stays_open_loop_without_a_jump():
+def test_a_dip_begun_blind_is_skipped_without_a_jump():
     s = DipServo()
     m = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12, servo=s)
-    ref = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12)
+    ref = ScriptedMotion(home=(-0.12, 0.0, 0.07), dip_depth=0.12, dip_period=0.0)
     m(6.0)
     s.observe(6.5, (0.0, 0.0, 0.1), 0.03)
-    assert m(7.0).position == pytest.approx(ref(7.0).position)      # same dip: still open loop
+    assert m(7.0).position == pytest.approx(ref(7.0).position)      # same dip: still skipped, on the path
     m(15.0)                                                          # between dips
     s.observe(25.0, (0.0, 0.0, 0.1), 0.03)
     assert m(27.0).position != pytest.approx(ref(27.0).position)    # next dip: servoed

@@ -31,8 +31,9 @@ handle at the 0.5 master-to-slave scale. The offsets change nothing of the slave
 themselves: motion the teleoperation loses (hold, clutch) is lost, and the servo corrects from what
 it sees next.
 
-A dip that begins before any observation stays open loop (:meth:`update` returns None until it
-ends); with an observation older than ``timeout`` the offsets are held. Master and world axes are
+A dip that begins before any observation is skipped (:meth:`update` returns None until it ends,
+and ScriptedMotion then stays on its path: pushed blind, an open-loop dip drove a tool 27 mm into the
+tissue while the platform started); with an observation older than ``timeout`` the offsets are held. Master and world axes are
 taken as parallel (the Touch bases are aligned with ``world``); the gains absorb the master-to-slave
 scale. Units: m, s.
 """
@@ -95,7 +96,7 @@ class DipServo(object):
     def update(self, t, b):
         """Advance to script time t with dip weight b in [0, 1]; returns (ax, ay, -e) to add to the
         handle position [m], or None before the first observation and in a dip that began before it
-        (open loop)."""
+        (skipped)."""
         dt = 0.0 if self._t is None else _clip(t - self._t, 0.0, 0.05)
         self._t = t
         self._lifting = b > 0.0 and (self._lifting or b < self._b)     # the dip's ramp down

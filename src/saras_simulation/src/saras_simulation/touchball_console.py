@@ -82,7 +82,8 @@ class ScriptedMotion(object):
     in between. ``dip_period`` 0 disables. With ``servo`` (:class:`saras_simulation.dip_servo.DipServo`,
     fed with the tool tip the surgeon sees), the dip's depth and place follow the tool instead: the
     handle goes down until the tip is ``servo.depth`` into the tissue, towards ``servo.site``, and
-    between dips the path is offset to keep the tip ``servo.hover`` above the tissue. The surgeon
+    between dips the path is offset to keep the tip ``servo.hover`` above the tissue; a dip that
+    begins before the servo sees the tool is skipped (a surgeon does not push blind). The surgeon
     then also moves along the path at ``pace`` (0-1) times its frequencies and stops on it during a
     dip (no blend towards ``home``): the pace a SARAS chain whose set-point may lead the arm by only
     a few mm follows on a loaded host (:mod:`saras_simulation.dip_servo`).
@@ -119,7 +120,7 @@ class ScriptedMotion(object):
         pos = (self.home[0] + self.amplitude[0] * math.sin(w[0] * u),
                self.home[1] + self.amplitude[1] * math.sin(w[1] * u + math.pi / 2),
                self.home[2] + self.amplitude[2] * math.sin(w[2] * u))
-        if b > 0.0 and servo is None:
+        if b > 0.0 and self.servo is None:     # open-loop dip; a servoed surgeon never dips blind
             target = (self.home[0], self.home[1] + self.amplitude[1], self.home[2] - self.dip_depth)
             pos = tuple((1.0 - b) * p + b * g for p, g in zip(pos, target))
         if servo is not None:                   # working height and dip (dip_servo), aim at the site

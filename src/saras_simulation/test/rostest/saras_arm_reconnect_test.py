@@ -10,6 +10,7 @@ import numpy as np
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped
+from std_msgs.msg import Bool
 
 from saras_drivers import saras_arm_kinematics as sak
 from saras_drivers import keys
@@ -53,8 +54,12 @@ class TestReconnect(unittest.TestCase):
         self.status = []
         diag_status.subscribe(self.status)
         self.pub = rospy.Publisher('/mesa_left/target_pose', PoseStamped, queue_size=10)
+        links = []   # /mesa_left/arm_link (latched): the teleoperation re-synchronises on false, then true
+        rospy.Subscriber('/mesa_left/arm_link', Bool, lambda m: links.append(m.data))
+        self.assertTrue(wait(lambda: links and not any(links), 10.0), 'arm_link false not latched before the connection')
         model, server = self.make_server()
         self.assertTrue(wait(lambda: server.sids, 20.0), 'driver did not connect')
+        self.assertTrue(wait(lambda: links[-1:] == [True], 5.0), 'arm_link not true once connected: %s' % links)
         self.assertTrue(wait(lambda: server.events.get('hold', 0) >= 1, 5.0), 'no hold on connect')
         time.sleep(0.5)
         far = model.q.copy()
@@ -71,10 +76,12 @@ class TestReconnect(unittest.TestCase):
         targets_before = server.events.get('set_target', 0)
         self.assertFalse(np.allclose(held, far))
         self.assertTrue(wait(lambda: not self.driver_ok(), 2.0), 'driver did not report the drop')
+        self.assertTrue(wait(lambda: links[-1:] == [False], 2.0), 'arm_link not false after the drop: %s' % links)
         for _ in range(5):                                 # published during the outage: not queued
             self.send(goal)
             time.sleep(0.01)
         self.assertTrue(wait(lambda: server.sids and self.driver_ok(), 15.0), 'no reconnection')
+        self.assertTrue(wait(lambda: links[-1:] == [True], 2.0), 'arm_link not true after the reconnection')
         time.sleep(1.0)
         self.assertEqual(server.events.get('set_target', 0), targets_before, 'old target replayed')
         self.assertFalse(model.moving)

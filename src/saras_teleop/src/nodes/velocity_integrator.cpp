@@ -24,6 +24,11 @@
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  *
+ * arm_link (std_msgs/Bool, latched by the arm driver): false on its (re)start and while disconnected,
+ * true while it forwards set-points. False is a fault, and so is its return to true: after a driver
+ * or arm outage the set-point re-anchors on the measured pose at the operator's clutch, not before
+ * (a clutch released while the link is down holds again). No publisher: no effect.
+ *
  * hold (std_msgs/Bool, latched): true from a fault until the clutch release that clears it,
  * published on each change: the arm driver then stops the arm where it is instead of letting it
  * complete the last set-point, and re-synchronises when it turns false (the set-point is
@@ -113,6 +118,7 @@ public:
     start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
+    arm_link_sub_ = nh.subscribe("arm_link", 2, &VelocityIntegratorNode::onArmLink, this);
     device_sub_ = nh.subscribe("device_state", 10, &VelocityIntegratorNode::onDevice, this, fast);
     collision_sub_ = nh.subscribe("collision_report", 2, &VelocityIntegratorNode::onCollision, this);
     jaw_.reset(new JawChannel(nh, pnh, max_step_, [this] { return hold_ || !vi_.commanding(); }));
@@ -153,6 +159,16 @@ private:
       fault("console link stale");
   }
 
+  void onArmLink(const std_msgs::Bool::ConstPtr& m)
+  {
+    const bool was_down = !arm_link_ok_;
+    arm_link_ok_ = m->data;
+    if (!arm_link_ok_)
+      fault("arm link down (driver restarted or disconnected)");
+    else if (was_down)
+      fault("arm link back: re-synchronise on the measured pose");
+  }
+
   void onDevice(const saras_msgs::HapticDeviceState::ConstPtr& m)
   {
     if (m->stale)
@@ -160,7 +176,12 @@ private:
     jaw_->onDevice(*m);
     const bool was_fault = vi_.faults() > clutch_faults_;
     const bool released = vi_.clutch(m->clutch);
-    if (released && was_fault)
+    if (released && !arm_link_ok_)
+    {
+      clutch_faults_ = vi_.faults();
+      fault("arm link still down");
+    }
+    else if (released && was_fault)
     {
       clutch_faults_ = vi_.faults();
       ROS_INFO("velocity_integrator: clutch released after a hold: re-anchored on the measured pose, %.2f mm from "
@@ -323,6 +344,7 @@ private:
     s.add("input age [s]", t_twist_.isZero() ? 1e6 : std::min((now - t_twist_).toSec(), 1e6));
     s.add("target_pose rate [Hz]", published_.rate());
     s.add("link ok", link_ok_);
+    s.add("arm link ok", arm_link_ok_);
     s.add("measured pose age [s]", t_measured_.isZero() ? 1e6 : std::min((now - t_measured_).toSec(), 1e6));
     s.add("set-point lead [mm]", 1e3 * vi_.lead());
     s.add("lead-limited steps", vi_.leadLimitedSteps());
@@ -350,14 +372,14 @@ private:
   unsigned tf_decimation_ = 10;
   unsigned long count_ = 0;
   Vector6d twist_ = Vector6d::Zero();
-  bool link_ok_ = true, hold_ = true;
+  bool link_ok_ = true, hold_ = true, arm_link_ok_ = true;
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;
   ros::Publisher pose_pub_, hold_pub_;
   std_msgs::Bool hold_msg_;
   bool held_ = false, hold_sent_ = false;
-  ros::Subscriber start_sub_, twist_sub_, link_sub_, device_sub_, collision_sub_;
+  ros::Subscriber start_sub_, twist_sub_, link_sub_, arm_link_sub_, device_sub_, collision_sub_;
   ros::SteadyTimer timer_;
   ros::Time t0_, t_twist_, t_pub_, last_stamp_, t_measured_, t_collision_;
   uint64_t received_ = 0, rejected_ = 0;

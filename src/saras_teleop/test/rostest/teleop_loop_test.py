@@ -78,6 +78,7 @@ class Fixture(object):
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics)
         self.holds = []            # (time, data) of /mesa_left/hold (the arm driver stops the arm on true)
         rospy.Subscriber('/mesa_left/hold', Bool, lambda m: self.holds.append((time.time(), m.data)))
+        self.arm_link_pub = rospy.Publisher('/mesa_left/arm_link', Bool, queue_size=2, latch=True)
         self.start_pose = PoseStamped()
         self.start_pose.header.frame_id = 'mesa_left/sbs_world'
         self.start_pose.pose.position.x, self.start_pose.pose.position.y, self.start_pose.pose.position.z = 0.3, 0.1, 0.15
@@ -323,6 +324,8 @@ class TeleopLoopTest(unittest.TestCase):
                     and int(v.get('contact force violations', '0')) > 0]
         self.assertTrue(gate, 'contact-force violations not reported on /diagnostics')
 
+        self.check_arm_link(fx)
+
         # collision monitoring gone: reported, and the set-point slows to 20 % of the limit
         fx.collision = False
         time.sleep(1.5)
@@ -331,6 +334,30 @@ class TeleopLoopTest(unittest.TestCase):
                     and v.get('collision monitoring') == 'lost']
         self.assertTrue(lost, 'loss of collision monitoring not reported on /diagnostics')
         fx.run = False
+
+    def check_arm_link(self, fx):
+        """The arm driver restarted (arm_link false, then true): the set-point holds until the operator's
+        clutch after the link is back (a clutch while it is down does not resume), then re-anchors."""
+        fx.arm_link_pub.publish(Bool(data=False))
+        self.wait_for(lambda: fx.holds and fx.holds[-1][1], 2.0, 'the hold on arm_link false')
+        t_hold = fx.holds[-1][0]
+        fx.clutch()
+        time.sleep(0.5)
+        self.assertTrue(fx.holds[-1][1], 'a clutch while the arm link was down released the hold')
+        fx.arm_link_pub.publish(Bool(data=True))
+        time.sleep(0.5)
+        self.assertTrue(fx.holds[-1][1], 'the hold ended with the arm link, without the clutch')
+        release = fx.clutch()
+        with fx.lock:
+            frozen = [t[2:5] for t in fx.targets if t_hold + 0.1 < t[0] < release - 0.3]
+        self.assertGreater(len(frozen), 100)
+        self.assertLess(max(math.dist(p, frozen[0]) for p in frozen), 1e-9)
+        time.sleep(1.5)
+        self.assertFalse(fx.holds[-1][1], 'hold still true after the clutch release with the arm link up')
+        with fx.lock:
+            after = [t[2:5] for t in fx.targets if t[0] > release]
+        self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
+        self.assertLess(math.dist(after[0], frozen[-1]), 1e-3)
 
     def test_nodelets_share_one_manager(self):
         """Every teleop output is published by the manager process (the nodelets run inside it: their
