@@ -96,3 +96,24 @@ def test_report_agreement_table_compares_known_estimates_with_the_nearest_truth(
     assert r['rms_contact_mm'] == pytest.approx(0.5)                       # t = 10.5 .. 10.7, 0.5 mm deeper
     assert r['latency_ms'][0] == pytest.approx(50.0) and r['latency_ms'][1] < 250.0
     assert 'left' in contact_agreement_html(rows) and 'right' not in rows
+
+
+def test_report_agreement_uses_the_truth_at_the_pose_stamps():
+    # a dip at 5 mm/s: truth recorded 80 ms after its pose stamp; the estimate exact at its image stamp
+    pytest.importorskip('matplotlib')
+    import collections
+    from saras_bringup.report import contact_agreement
+    Truth = collections.namedtuple('Truth', 'depth')
+    Arr = collections.namedtuple('Arr', 'data')
+
+    def depth(t):
+        return max(0.0, 0.005 * (t - 10.0))
+    stamps = [10.0 + i / 30.0 for i in range(30)]
+    tip = [(t + 0.08, Arr([0.0, 0.0, 0.0, -depth(t), t])) for t in stamps]
+    truth = [(t + 0.08, Truth(depth(t))) for t in stamps]
+    est = [(t + 0.1, Arr(estimate(t, 2, depth(t), 0.9))) for t in stamps[3:-3]]
+    late = contact_agreement({'/mesa_left/contact_truth': truth, '/mesa_left/contact_estimate': est})['left']
+    assert late['rms_contact_mm'] > 0.3                                   # 80 ms x 5 mm/s = 0.4 mm
+    rows = contact_agreement({'/mesa_left/contact_truth': truth, '/mesa_left/contact_truth_tip': tip,
+                              '/mesa_left/contact_estimate': est})
+    assert rows['left']['rms_contact_mm'] == pytest.approx(0.0, abs=1e-6)

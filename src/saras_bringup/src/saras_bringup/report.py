@@ -261,14 +261,13 @@ def plot_contact_depths(data, t0):
     if not any(data.get('/mesa_%s/contact_truth' % s) or data.get('/mesa_%s/contact_estimate' % s) for s in SIDES):
         return None
     fig, axes = plt.subplots(len(SIDES), 1, figsize=(9, 5), sharex=True)
-    for ax, side in zip(axes, SIDES):
-        truth = data.get('/mesa_%s/contact_truth' % side, [])
-        if truth:
-            ax.plot([t - t0 for t, _ in truth], [1e3 * m.depth for _, m in truth], 'k-', lw=1.2,
-                    label='true (contact_sim)')
+    for ax, side in zip(axes, SIDES):   # at the image and pose stamps (truth_series), as contact_agreement
+        tt, td = truth_series(data, side)
+        if tt.size:
+            ax.plot(tt - t0, 1e3 * td, 'k-', lw=1.2, label='true (contact_sim)')
         est = data.get('/mesa_%s/contact_estimate' % side, [])
-        known = [(t, m.data[2]) for t, m in est if len(m.data) > 2 and m.data[1] > 0.5]
-        unknown = [t for t, m in est if len(m.data) > 2 and m.data[1] <= 0.5]
+        known = [(m.data[0], m.data[2]) for t, m in est if len(m.data) > 2 and m.data[1] > 0.5]
+        unknown = [m.data[0] for t, m in est if len(m.data) > 2 and m.data[1] <= 0.5]
         if known:
             ax.plot([t - t0 for t, _ in known], [1e3 * d for _, d in known], '.', ms=3, color='tab:blue',
                     label='estimated (stereo)')
@@ -302,32 +301,43 @@ def plot_tip_heights(data, t0):
     return fig
 
 
+def truth_series(data, side):
+    """(times, depths) of the contact truth: contact_sim's tip truth at the stamps of the poses it was
+    computed from (depth = max(0, -signed distance)); bags without those stamps: /contact_truth at its
+    recording time (late by the transport, so the comparison then carries that lag)."""
+    tip = [m.data for _, m in data.get('/mesa_%s/contact_truth_tip' % side, []) if len(m.data) > 4]
+    if tip:
+        tip.sort(key=lambda d: d[4])
+        return np.array([d[4] for d in tip]), np.array([max(0.0, -d[3]) for d in tip])
+    truth = data.get('/mesa_%s/contact_truth' % side, [])
+    return np.array([t for t, _ in truth]), np.array([m.depth for _, m in truth])
+
+
 def contact_agreement(data, max_age=0.1):
     """Per side: estimates, unknown share, contact frames of the truth, the depth error of the known
-    estimates against the truth recorded nearest their image stamp (within ``max_age`` s), over all of
-    them and over those in true contact, and the latency from the image stamp to the estimate's
-    recording."""
+    estimates against the truth at their image stamp (interpolated between the truth samples around it,
+    the nearer within ``max_age`` s; :func:`truth_series`), over all of them and over those in true
+    contact, and the latency from the image stamp to the estimate's recording."""
     rows = {}
     for side in SIDES:
-        truth = data.get('/mesa_%s/contact_truth' % side, [])
+        tt, td = truth_series(data, side)
         timed = [(t, m.data) for t, m in data.get('/mesa_%s/contact_estimate' % side, []) if len(m.data) > 4]
         est = [d for _, d in timed]
-        if not truth or not est:
+        if not tt.size or not est:
             continue
-        tt = np.array([t for t, _ in truth])
-        td = np.array([m.depth for _, m in truth])
         err, err_contact, known_in_contact, in_contact = [], [], 0, 0
         for d in est:
             i = int(np.clip(np.searchsorted(tt, d[0]), 1, len(tt) - 1))
             i = i - 1 if abs(tt[i - 1] - d[0]) < abs(tt[i] - d[0]) else i
             if abs(tt[i] - d[0]) > max_age:
                 continue
-            in_contact += td[i] > 0
+            true = float(np.interp(d[0], tt, td))
+            in_contact += true > 0
             if d[1] > 0.5:
-                err.append(d[2] - td[i])
-                known_in_contact += td[i] > 0
-                if td[i] > 0:
-                    err_contact.append(d[2] - td[i])
+                err.append(d[2] - true)
+                known_in_contact += true > 0
+                if true > 0:
+                    err_contact.append(d[2] - true)
         e = np.abs(np.array(err))
         ec = np.abs(np.array(err_contact))
         lat = np.array([t - d[0] for t, d in timed])
