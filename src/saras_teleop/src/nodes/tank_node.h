@@ -22,7 +22,9 @@
  * interaction force is taken as zero (free motion) and the status says so (WARN).
  * tank_slave gates every contact force (ForceGate: ~max_contact_force [N], ~max_contact_force_step
  * [N] + ~max_contact_force_rate [N/s] * dt, non-finite): a violation zeroes the channel's action and
- * measurement for ~contact_force_hold_time [s] (the arm holds) and is reported (ERROR, counters).
+ * measurement for ~contact_force_hold_time [s] (the arm holds) and is reported (ERROR, counters);
+ * <channel>/force_gate (std_msgs/Bool, latched) is true while it holds, so that the channel's
+ * velocity_integrator holds the arm where it is and resumes only through the operator's clutch.
  * A tank restarted under the same ROS master (respawn) never comes back with fresh energy: with
  * ~energy_journal_dir (default /dev/shm; '' = off) it resumes with exactly the energy of its last
  * completed step before it died (EnergyJournal, a memory-mapped file bound to this master session by
@@ -46,6 +48,7 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
+#include <std_msgs/Bool.h>
 #include <std_msgs/Float32.h>
 #include <std_msgs/Float64.h>
 
@@ -151,7 +154,11 @@ public:
       Port& pt = ports_[i];
       pt.name = channels[i];
       if (Traits::kGateForce)
+      {
         pt.gate.reset(new ForceGate(g));
+        pt.gate_pub = nh.advertise<std_msgs::Bool>(channels[i] + "/force_gate", 1, true);
+        publishGate(pt, false);
+      }
       typename Traits::Output proto;
       proto.header.frame_id = "mesa_" + channels[i] + "/sbs_world";
       pt.pool.reset(new MessagePool<typename Traits::Output>(kPoolSize, proto));
@@ -227,7 +234,18 @@ private:
     ros::Time stamp;          // header stamp propagated to the output
     Vector6d des = Vector6d::Zero(), conj = Vector6d::Zero();
     std::unique_ptr<ForceGate> gate;  // tank_slave: contact-force plausibility
+    ros::Publisher gate_pub;          // <channel>/force_gate, latched
+    bool gate_state = false;
   };
+
+  /// On a change of the gate only (a fault: the one allocation is not on the steady-state path).
+  static void publishGate(Port& pt, bool holding)
+  {
+    pt.gate_state = holding;
+    std_msgs::BoolPtr m(new std_msgs::Bool);
+    m->data = holding;
+    pt.gate_pub.publish(m);
+  }
 
   void onDesired(std::size_t i, const typename Traits::Desired& m)
   {
@@ -321,6 +339,8 @@ private:
       const bool gated = pt.gate && pt.gate->holding(now.toSec());  // implausible force: hold the arm
       if (gated)
         tank_->setConjugate(i, Vector6d::Zero());
+      if (pt.gate && gated != pt.gate_state)
+        publishGate(pt, gated);
       tank_->setDesired(i, (fresh_des && measured && !gated) ? pt.des : Vector6d::Zero());
     }
     const double pin = inbox_ / dt;

@@ -24,6 +24,9 @@
  * (collision_report) silent for ~collision_timeout: ~collision_loss "hold" (FAULT), "slow" (velocity
  * limits x ~collision_loss_speed_scale) or "ignore"; reported on /diagnostics either way.
  *
+ * force_gate (std_msgs/Bool, latched by tank_slave): true while an implausible contact force holds the
+ * channel: a fault (the arm driver stops the arm where it is; resume through the clutch).
+ *
  * arm_link (std_msgs/Bool, latched by the arm driver): false on its (re)start and while disconnected,
  * true while it forwards set-points. False is a fault, and so is its return to true: after a driver
  * or arm outage the set-point re-anchors on the measured pose at the operator's clutch, not before
@@ -119,6 +122,7 @@ public:
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
     link_sub_ = nh.subscribe("link_status", 10, &VelocityIntegratorNode::onLink, this, fast);
     arm_link_sub_ = nh.subscribe("arm_link", 2, &VelocityIntegratorNode::onArmLink, this);
+    gate_sub_ = nh.subscribe("force_gate", 2, &VelocityIntegratorNode::onForceGate, this);
     device_sub_ = nh.subscribe("device_state", 10, &VelocityIntegratorNode::onDevice, this, fast);
     collision_sub_ = nh.subscribe("collision_report", 2, &VelocityIntegratorNode::onCollision, this);
     jaw_.reset(new JawChannel(nh, pnh, max_step_, [this] { return hold_ || !vi_.commanding(); }));
@@ -167,6 +171,12 @@ private:
       fault("arm link down (driver restarted or disconnected)");
     else if (was_down)
       fault("arm link back: re-synchronise on the measured pose");
+  }
+
+  void onForceGate(const std_msgs::Bool::ConstPtr& m)
+  {
+    if (m->data)
+      fault("implausible contact force (tank_slave's gate)");
   }
 
   void onDevice(const saras_msgs::HapticDeviceState::ConstPtr& m)
@@ -379,7 +389,7 @@ private:
   ros::Publisher pose_pub_, hold_pub_;
   std_msgs::Bool hold_msg_;
   bool held_ = false, hold_sent_ = false;
-  ros::Subscriber start_sub_, twist_sub_, link_sub_, arm_link_sub_, device_sub_, collision_sub_;
+  ros::Subscriber start_sub_, twist_sub_, link_sub_, arm_link_sub_, gate_sub_, device_sub_, collision_sub_;
   ros::SteadyTimer timer_;
   ros::Time t0_, t_twist_, t_pub_, last_stamp_, t_measured_, t_collision_;
   uint64_t received_ = 0, rejected_ = 0;

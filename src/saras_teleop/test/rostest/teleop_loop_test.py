@@ -323,6 +323,10 @@ class TeleopLoopTest(unittest.TestCase):
             gate = [(l, v) for n, l, _h, v in fx.status if n == 'teleop/tank_slave/tank_slave: energy tank'
                     and int(v.get('contact force violations', '0')) > 0]
         self.assertTrue(gate, 'contact-force violations not reported on /diagnostics')
+        # the gate (tank_slave's force_gate) holds the chain: the driver stops the arm where it is
+        self.assertTrue(fx.holds[-1][1], 'no hold on the implausible contact force: %s' % fx.holds[-3:])
+        fx.clutch()
+        self.wait_for(lambda: not fx.holds[-1][1], 2.0, 'the hold to end at the clutch release')
 
         self.check_arm_link(fx)
 
