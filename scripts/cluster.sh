@@ -105,8 +105,9 @@ start_relays() {
     launch_args+=(channel_delay_ms:="${IMPAIR_DELAY_MS:-0}" channel_jitter_ms:="${IMPAIR_JITTER_MS:-0}"
                   channel_loss:="${IMPAIR_LOSS:-0}" channel_burst_length:="$([ "${IMPAIR_BURST:-0}" = 1 ] && echo 4 || echo 1)")
     # set-points carry the master's sample time: the drivers' age limit (100 ms) plus the channel's latency
-    [ "${IMPAIR_DELAY_MS:-0}${IMPAIR_JITTER_MS:-0}" != 00 ] && launch_args+=(arm_max_target_age:="$(python3 -c \
-      "print(round(0.1 + 1.5e-3 * ($IMPAIR_DELAY_MS + ${IMPAIR_JITTER_MS:-0}), 3))")")
+    local age
+    age="$(awk -v d="${IMPAIR_DELAY_MS:-0}" -v j="${IMPAIR_JITTER_MS:-0}" 'BEGIN {if (d + j > 0) print 0.1 + 1.5e-3 * (d + j)}')"
+    [ -n "$age" ] && launch_args+=(arm_max_target_age:="$age")
   fi
   launch_args+=(console_target:="$c" console_target_port:=16000 console_listen_port:=5016
                 left_arm_host:="$t" left_arm_port:=15001 left_arm_serve_port:=5001

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from saras_bringup.passivity import (contact_summary, energy_balance, port_energy, port_power, time_to_hold,
-                                    tracking_error, travel, engaged_windows)
+                                    tracking_error, travel, engaged_windows, device_windows)
 
 
 def test_port_power_holds_the_latest_conjugate():
@@ -56,6 +56,14 @@ def test_tracking_error_reanchors_on_the_clutch():
     # a stale link ends a window as the clutch does
     assert engaged_windows([(0.0, (False, False)), (0.5, (False, True))], 1.0) == [(0.0, 0.5)]
     assert math.isnan(tracking_error(master, slave, 1.0, [])[0])
+
+
+def test_device_windows_merge_clutch_stale_and_hold():
+    states = [(0.0, (False, False)), (1.0, (True, False)), (1.2, (False, False)), (3.0, (False, True)),
+              (3.1, (False, False))]
+    holds = [(0.5, False), (2.0, True), (3.5, False)]      # a hold from 2.0 s until the clutch-less 3.5 s
+    assert device_windows(states, holds, 5.0) == [(0.0, 1.0), (1.2, 2.0), (3.5, 5.0)]
+    assert device_windows([], [], 5.0) == []
 
 
 def test_time_to_hold():

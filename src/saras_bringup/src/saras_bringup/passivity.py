@@ -110,6 +110,21 @@ def engaged_windows(states, t_end):
     return out
 
 
+def device_windows(states, holds, t_end):
+    """engaged_windows from the recorded device states [(t, (clutch, stale))] and the latched hold
+    [(t, bool)] (either may start later: until its first sample a flag counts as clear)."""
+    events = sorted([(t, 0, tuple(v)) for t, v in states] + [(t, 1, (bool(v),)) for t, v in holds])
+    if not events:
+        return []
+    flags = [(False, False), (False,)]
+    timeline = [(events[0][0], (False, False, False))]
+    for t, k, v in events:
+        if flags[k] != v:
+            flags[k] = v
+            timeline.append((t, flags[0] + flags[1]))
+    return engaged_windows(timeline, t_end)
+
+
 def tracking_error(master, slave, scale, windows=None):
     """RMS and max [m] of |scale * (master - master0) - (slave - slave0)| at the slave samples.
 
@@ -123,10 +138,11 @@ def tracking_error(master, slave, scale, windows=None):
     if windows is None:
         windows = [(min(master[0][0], slave[0][0]), max(master[-1][0], slave[-1][0]) + 1.0)]
     mt = [m[0] for m in master]
+    st = [x[0] for x in slave]
     errs = []
     for t0, t1 in windows:
         anchor = None
-        for t, s in slave[bisect.bisect_left([x[0] for x in slave], t0):]:
+        for t, s in slave[bisect.bisect_left(st, t0):]:
             if t >= t1:
                 break
             k = bisect.bisect_right(mt, t) - 1
