@@ -17,7 +17,11 @@ import subprocess
 import yaml
 
 WS = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DURATION = int(os.environ.get('SARAS_TEST_DEMO_DURATION', '20'))
+# 32 s: the scripted surgeon dips every 12 s for 8 s (touchball_console_sim's dip_period and
+# dip_duration), so a 32 s recording holds two whole dips of each tool whatever its phase (12 + 12 + 8);
+# a hold on a loaded host (the operator clutches, the dip's motion is lost) costs one of them. A 20 s
+# recording holds one: a held dip left a tool 0.07 mm deep.
+DURATION = int(os.environ.get('SARAS_TEST_DEMO_DURATION', '32'))
 RECORDING = os.path.join(WS, 'src', 'saras_bringup', 'config', 'recording.yaml')
 
 
