@@ -393,3 +393,55 @@ def test_utf8_check_skipped_but_malformed_text_still_refused(link):
     with pytest.raises(UnicodeDecodeError):
         frame.data.decode('utf-8')                         # what WebSocket.recv() does with text
     assert not skip_utf8_validation(object())             # not a websocket: left alone
+
+
+def _queued(server, commands, wait):
+    """Run ``commands`` (event, payload) as the server's command tasks while its emission lock is
+    held for ``wait`` seconds (a loop busy behind a queue), then let them through; returns replies."""
+    import asyncio
+    server._admit = lambda sid, command: None                  # pylint: disable=protected-access
+
+    async def scenario():
+        server._emit_lock = asyncio.Lock()                     # pylint: disable=protected-access
+        server._deadline = time.monotonic() + 1e6              # no state samples owed
+        fns = {'set_target': server._set_target, 'set_clip': server._set_clip}  # pylint: disable=protected-access
+        async with server._emit_lock:                          # pylint: disable=protected-access
+            tasks = [asyncio.ensure_future(server._run('sid', ev, p, fns[ev]))  # pylint: disable=protected-access
+                     for ev, p in commands]
+            await asyncio.sleep(wait)
+        return await asyncio.gather(*tasks)
+    return asyncio.run(scenario())
+
+
+def test_a_backlog_of_set_points_executes_the_newest_once():
+    # five set_target tasks queued behind a busy loop: the first to run executes the newest, the
+    # four older ones are superseded (not executed one after the other, replaying old motion)
+    model = SarasArmModel(sak.load('left', PA), max_velocity=2.0)
+    server = SarasArmServer(model, port=_free_port(), rate=500.0, max_target_age=0.1, key=KEY)
+    q0 = model.q.copy()
+    goals = []
+    for k in range(5):
+        near = q0.copy()
+        near[:2] += 0.01 * (k + 1)
+        goals.append(model.tip_in_base(near)[:3, 3])
+    replies = _queued(server, [('set_target', proto.make_set_target(k + 1, g, None, time.time()))
+                               for k, g in enumerate(goals)], 0.02)
+    assert server.accepted == 1 and server.superseded_targets == 4 and server.stale_targets == 0
+    assert model.target_id == 5
+    assert [r['code'] for r in replies] == [proto.OK] + [proto.SUPERSEDED] * 4
+
+
+def test_a_set_point_that_waited_beyond_its_age_is_not_executed():
+    # fresh when its task started, 150 ms old when the busy loop gets to it (limit 100 ms): stale,
+    # not executed (judged when it started, it was executed 150 ms late)
+    model = SarasArmModel(sak.load('left', PA), max_velocity=2.0)
+    server = SarasArmServer(model, port=_free_port(), rate=500.0, max_target_age=0.1, key=KEY)
+    target0 = model.target.copy()
+    far = model.q.copy()
+    far[:2] += 0.05
+    replies = _queued(server, [('set_target', proto.make_set_target(1, model.tip_in_base(far)[:3, 3], None,
+                                                                    time.time())),
+                               ('set_clip', proto.make_set_clip(2, model.q[5] + 0.3, t=time.time()))], 0.15)
+    assert [r['code'] for r in replies] == [proto.STALE, proto.STALE]
+    assert server.stale_targets == 2 and server.accepted == 0
+    assert np.array_equal(model.target, target0)

@@ -14,7 +14,9 @@ Client -> server events (the server answers every one with a Socket.IO acknowled
 
 ``set_target``       ``{"id": int, "position": [x, y, z], "orientation": [x, y, z, w] | null,
                      "time": float}`` (``time``, optional: sender wall clock [s]; a server with
-                     ``max_target_age`` drops targets older than that, counted, no answer)
+                     ``max_target_age`` drops targets older than that when it executes them,
+                     counted, no ``error`` event; one behind which a newer ``set_target`` is
+                     already waiting is skipped: ``superseded``, counted, no ``error`` event)
 ``set_max_velocity`` ``{"id": int, "max_velocity": float}``      [rad/s]; insertion moves at
                      max_velocity * insertion_ratio [m/s] (ratio published in ``info``)
 ``set_clip``         ``{"id": int, "jaw": float | null, "roll": float | null, "time": float}``   [rad],
@@ -58,9 +60,10 @@ RCM_VIOLATION = 'rcm_violation'      # target not reachable by pivoting through 
 WORKSPACE = 'workspace'              # pivot angles / insertion / clip beyond joint limits
 BAD_VALUE = 'bad_value'              # e.g. max velocity <= 0 or above the hardware limit
 STALE = 'stale'                      # set_target older than the server's max_target_age
+SUPERSEDED = 'superseded'            # set_target not executed: a newer one was already waiting
 NOT_COMMANDER = 'not_commander'      # from a session that is not the authenticated commanding one
 RATE_LIMITED = 'rate_limited'        # the session sent more events than its rate limit
-CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE, NOT_COMMANDER, RATE_LIMITED)
+CODES = (OK, BAD_PAYLOAD, RCM_VIOLATION, WORKSPACE, BAD_VALUE, STALE, SUPERSEDED, NOT_COMMANDER, RATE_LIMITED)
 
 #: Largest Engine.IO message the server accepts [bytes] (a command is ~150 bytes).
 MAX_MESSAGE_BYTES = 4096

@@ -15,6 +15,13 @@ python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
 * event handlers validate payloads with :mod:`saras_arm_protocol` and answer with an ack; a rejected
   command also gets an ``error`` event and changes nothing. They run as asyncio tasks (FIFO, so in
   the order sent);
+* set-points are judged when they are executed, after the wait for the emission lock (behind a
+  queue of commands on a starved host that wait is long): the first ``set_target`` task to get
+  there executes the newest set-point received so far, the tasks of the older ones it replaced
+  skip (``superseded``: the newest wins, as a servo loop sampling its set-point), and a set-point
+  older than ``max_target_age`` then is dropped (``stale``). Judged when its task started
+  instead, a backlog of old set-points was executed one after the other: with the commanding
+  driver killed, the arm kept moving for 360 ms;
 * back-pressure: a client whose Engine.IO send queue still holds ``max_backlog`` packets (it reads
   slower than the stream for a while) skips that state sample (counted in ``state_skipped``), so neither the
   state latency nor the Engine.IO ping behind it grows without bound;
@@ -42,6 +49,12 @@ from aiohttp import web
 from saras_drivers import saras_arm_auth as auth
 from saras_drivers import saras_arm_protocol as proto
 from saras_simulation.saras_arm_model import matrix_to_quat
+
+
+def _cmd_id(payload):
+    """The command id of a payload (0 when missing or not an int)."""
+    cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
+    return cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
 
 
 class SarasArmServer(object):
@@ -78,6 +91,10 @@ class SarasArmServer(object):
             raise ValueError('max_target_age must be >= 0 s (0 = no limit), got %r' % max_target_age)
         self.max_target_age = float(max_target_age)
         self.stale_targets = 0       # set_target commands older than max_target_age when handled
+        self.superseded_targets = 0  # set_target commands a newer waiting one replaced (not executed)
+        self._target_arrivals = 0    # set_target commands admitted so far (newest wins)
+        self._newest_target = (0, None)     # (arrival, payload) of the newest set_target
+        self._executed_arrival = 0   # arrival of the newest set_target executed
         self.log = logger or logging.getLogger('saras_arm_server')
         # Engine.IO heartbeat: a client that does not answer a ping (sent every ping_interval [s])
         # within ping_timeout [s] is dropped; a client sees a dead server after the same sum.
@@ -166,21 +183,30 @@ class SarasArmServer(object):
         return handler
 
     async def _run(self, sid, event, payload, fn):
-        cmd_id = payload.get('id', 0) if isinstance(payload, dict) else 0
-        cmd_id = cmd_id if isinstance(cmd_id, int) and not isinstance(cmd_id, bool) else 0
+        cmd_id = _cmd_id(payload)
         refusal = self._admit(sid, True)
         if refusal is not None:     # rate limit, or not the commanding session: no motion, no work
             return proto.reply(False, refusal, 'refused', 0)
         # first the state samples a late loop still owes (so they are not overtaken by the
         # command), then the command acts now: no await between advance() and fn()
         if event in ('set_target', 'set_clip') and self._stale(payload):
-            # a set-point that waited in our input longer than the limit is not executed (a
-            # simulator starved of CPU would otherwise replay seconds-old motion), and costs
-            # almost nothing, so that a backlog drains; counted, no error event: the client
-            # cannot act on it and it would add load
-            self.stale_targets += 1
-            return proto.reply(False, proto.STALE, '%s older than %.3f s' % (event, self.max_target_age), cmd_id)
+            return self._drop_stale(event, cmd_id)
+        if event == 'set_target':
+            self._target_arrivals += 1
+            self._newest_target = (self._target_arrivals, payload)
         now = await self._sample_until()
+        # the wait for the emission lock can be long behind a queue of commands: the newest
+        # set-point received is executed by the first of their tasks that gets here, the older
+        # ones skip, and a set-point is judged when it is executed (module doc)
+        if event == 'set_target':
+            arrival, payload = self._newest_target
+            if arrival <= self._executed_arrival:
+                self.superseded_targets += 1
+                return proto.reply(False, proto.SUPERSEDED, 'a newer set_target was executed', cmd_id)
+            self._executed_arrival = arrival
+            cmd_id = _cmd_id(payload)
+        if event in ('set_target', 'set_clip') and self._stale(payload):
+            return self._drop_stale(event, cmd_id)
         try:
             self.advance(now)           # (a no-op if the loop already sampled past now)
             extra = fn(payload)
@@ -199,6 +225,13 @@ class SarasArmServer(object):
         if extra:
             r.update(extra)
         return r
+
+    def _drop_stale(self, event, cmd_id):
+        """A set-point that waited in our input longer than the limit is not executed (a simulator
+        starved of CPU would otherwise replay old motion), and costs almost nothing, so that a
+        backlog drains; counted, no error event: the client cannot act on it and it would add load."""
+        self.stale_targets += 1
+        return proto.reply(False, proto.STALE, '%s older than %.3f s' % (event, self.max_target_age), cmd_id)
 
     def _stale(self, payload):
         """True for a set_target / set_clip older than max_target_age (sender time vs our wall clock)."""
