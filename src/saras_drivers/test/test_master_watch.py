@@ -1,4 +1,4 @@
-"""MasterWatch: loss of the ROS master is detected (unreachable for grace s, or restarted)."""
+"""MasterWatch: loss of the ROS master is detected (refused, unreachable for grace s, or restarted)."""
 import pytest
 
 from saras_drivers.master_watch import MasterWatch
@@ -16,20 +16,37 @@ def test_unreachable_for_grace_is_lost_once():
 
     def probe():
         if not state['up']:
-            raise ConnectionRefusedError('refused')
+            raise TimeoutError('timed out')
         return state['pid']
 
     w = MasterWatch(probe, lost.append, grace=1.0, clock=clock)
     assert w.poll() is None
     state['up'] = False
     clock.t = 0.5
-    assert w.poll() is None              # a short outage is tolerated
+    assert w.poll() is None              # a short outage (timeouts: a loaded host) is tolerated
     clock.t = 1.0
     assert w.poll() is None
     clock.t = 1.6
     assert 'unreachable for 1.1 s' in w.poll()
     clock.t = 2.0
     w.poll()
+    assert len(lost) == 1
+
+
+def test_refused_connection_is_lost_at_once():
+    # nothing listens on the master's port any more: the master died, no grace
+    clock, state, lost = Clock(), {'up': True}, []
+
+    def probe():
+        if not state['up']:
+            raise ConnectionRefusedError(111, 'Connection refused')
+        return 100
+
+    w = MasterWatch(probe, lost.append, grace=1.0, clock=clock)
+    assert w.poll() is None
+    state['up'] = False
+    clock.t = 0.2
+    assert 'ROS master gone' in w.poll()
     assert len(lost) == 1
 
 

@@ -5,9 +5,10 @@ same port knows none of them: nothing re-registers, so nothing can be inspected,
 restarted any more. The platform therefore treats both as a fault that ends in a controlled safe
 stop (the arm holds, the recording closes, a clear message), not as something to ride through.
 
-:class:`MasterWatch` polls ``probe()`` (returns the master's PID, raises when unreachable) and calls
-``on_lost(reason)`` once: when the master has been unreachable for ``grace`` seconds, or at once
-when its PID changed (a restarted master).
+:class:`MasterWatch` polls ``probe()`` (returns the master's PID, raises when unreachable) every
+``period`` seconds and calls ``on_lost(reason)`` once: at once when the connection is refused (no
+process listens on the master's port: it died) or its PID changed (a restarted master), and when
+it has been unreachable otherwise (timeouts: a loaded or partitioned host) for ``grace`` seconds.
 """
 
 import threading
@@ -15,7 +16,7 @@ import time
 
 
 class MasterWatch(object):
-    def __init__(self, probe, on_lost, period=0.5, grace=1.0, clock=time.monotonic):
+    def __init__(self, probe, on_lost, period=0.2, grace=1.0, clock=time.monotonic):
         if not (period > 0 and grace >= 0):
             raise ValueError('period must be > 0 s and grace >= 0 s')
         self.probe, self.on_lost = probe, on_lost
@@ -32,7 +33,9 @@ class MasterWatch(object):
         now = self.clock()
         try:
             pid = self.probe()
-        except Exception as e:      # any transport error means unreachable
+        except ConnectionRefusedError as e:
+            return self._lose('ROS master gone (%s)' % e)
+        except Exception as e:      # any other transport error means unreachable
             if self.unreachable_since is None:
                 self.unreachable_since = now
             if now - self.unreachable_since >= self.grace:
