@@ -30,7 +30,8 @@
  * arm_link (std_msgs/Bool, latched by the arm driver): false on its (re)start and while disconnected,
  * true while it forwards set-points. False is a fault, and so is its return to true: after a driver
  * or arm outage the set-point re-anchors on the measured pose at the operator's clutch, not before
- * (a clutch released while the link is down holds again). No publisher: no effect.
+ * (a clutch released while the link is down holds again). No publisher: no effect; a publisher that
+ * disconnects (the driver died) is a fault, and the link stays down until a driver publishes true.
  *
  * hold (std_msgs/Bool, latched): true from a fault until the clutch release that clears it,
  * published on each change: the arm driver then stops the arm where it is instead of letting it
@@ -218,9 +219,18 @@ private:
               why.c_str());
   }
 
-  /// Timer-side supervision: stale measurement, twist stream gone, collision monitoring gone.
+  /// Timer-side supervision: arm driver gone, stale measurement, twist stream gone, collision monitoring gone.
   void supervise(const ros::Time& now)
   {
+    // the driver's latched arm_link publisher disconnected: the driver died (its TCP connection
+    // closed), an event, not a timeout; the link counts as down until a driver publishes true again
+    const bool driver_there = arm_link_sub_.getNumPublishers() > 0;
+    if (driver_seen_ && !driver_there && arm_link_ok_)
+    {
+      arm_link_ok_ = false;
+      fault("arm link lost (the arm driver is gone)");
+    }
+    driver_seen_ = driver_there;
     if (!t_measured_.isZero() && (now - t_measured_).toSec() > measured_timeout_)
       fault("arm state stale (no measured pose)");
     if (!t_twist_.isZero() && (now - t_twist_).toSec() > fault_timeout_)
@@ -383,6 +393,7 @@ private:
   unsigned long count_ = 0;
   Vector6d twist_ = Vector6d::Zero();
   bool link_ok_ = true, hold_ = true, arm_link_ok_ = true;
+  bool driver_seen_ = false;  ///< the arm_link publisher was connected at the last check
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;

@@ -362,6 +362,15 @@ class TeleopLoopTest(unittest.TestCase):
             after = [t[2:5] for t in fx.targets if t[0] > release]
         self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
         self.assertLess(math.dist(after[0], frozen[-1]), 1e-3)
+        # the driver dies: its latched arm_link publisher disconnects (no false is ever published)
+        fx.arm_link_pub.unregister()
+        self.wait_for(lambda: fx.holds[-1][1], 2.0, 'the hold when the arm_link publisher (the driver) is gone')
+        fx.arm_link_pub = rospy.Publisher('/mesa_left/arm_link', Bool, queue_size=2, latch=True)
+        fx.arm_link_pub.publish(Bool(data=True))          # a driver again
+        time.sleep(0.5)
+        self.assertTrue(fx.holds[-1][1], 'the hold ended with a new driver, without the clutch')
+        fx.clutch()
+        self.wait_for(lambda: not fx.holds[-1][1], 2.0, 'the hold to end at the clutch with a driver back')
 
     def test_nodelets_share_one_manager(self):
         """Every teleop output is published by the manager process (the nodelets run inside it: their
