@@ -230,6 +230,21 @@ def resume_time(sp, t_from, t_end, tol=0.0002):
     return None
 
 
+def right_affected(out, t_f, t_back, ee_r, sp_r, gaps):
+    """[violation] when the right chain was affected by a fault of the left one: held, its set-point
+    stream stalled (> 250 ms), or the arm not following what it was commanded; a still hand (e.g. the
+    scripted surgeon pressing into the tissue) is not a fault."""
+    held_r = [d for d in load(out, 'diag') if t_f <= float(d[0]) < t_back and
+              d[2].startswith('teleop/right/velocity_integrator') and 'HOLD' in d[3]]
+    path_r, cmd_r = (sum(math.dist(a[1], b[1]) for a, b in zip(window(x, t_f, t_back), window(x, t_f, t_back)[1:]))
+                     for x in (ee_r, sp_r))
+    gap = max(gaps) if gaps else float('inf')
+    if held_r or gap > 0.25 or (cmd_r >= 0.001 and path_r < 0.25 * cmd_r):
+        return ['right arm affected (%s, moved %.1f mm of %.1f mm commanded, longest set-point gap %.0f ms)'
+                % ('held' if held_r else 'not held', 1e3 * path_r, 1e3 * cmd_r, 1e3 * gap)]
+    return []
+
+
 def judge(out, ev, nxt_t):
     """One fault event -> dict of measured values and the list of violated expectations."""
     name, t_f, t_back = ev['fault'], float(ev['t_fault']), float(ev['t_back'])
@@ -290,11 +305,7 @@ def judge(out, ev, nxt_t):
         elif float(r['peak speed on recovery [mm/s]']) > 1e3 * SPEED_LIMIT:
             bad.append('recovery speed %s mm/s > 50' % r['peak speed on recovery [mm/s]'])
     if 'right' in keys:
-        held_r = [d for d in load(out, 'diag') if t_f <= float(d[0]) < t_back and
-                  d[2].startswith('teleop/right/velocity_integrator') and 'HOLD' in d[3]]
-        path_r = sum(math.dist(a[1], b[1]) for a, b in zip(window(ee_r, t_f, t_back), window(ee_r, t_f, t_back)[1:]))
-        if held_r or path_r < 0.001:
-            bad.append('right arm affected (%s, moved %.1f mm)' % ('held' if held_r else 'not held', 1e3 * path_r))
+        bad += right_affected(out, t_f, t_back, ee_r, sp_r, gaps)
     if 'diag' in keys and diags == []:
         bad.append('nothing reported on /diagnostics')
     if 'unknown' in keys and coll and not all(math.isnan(c) for c in coll):

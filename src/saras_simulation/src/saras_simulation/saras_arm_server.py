@@ -40,6 +40,7 @@ python-socketio ``AsyncServer`` on aiohttp, one asyncio loop per arm:
 
 import asyncio
 import logging
+import os
 import threading
 import time
 
@@ -67,9 +68,13 @@ class SarasArmServer(object):
     def __init__(self, model, host='127.0.0.1', port=5000, rate=1000.0, state_rate=250.0,
                  logger=None, ping_interval=1.0, ping_timeout=5.0, max_backlog=32,
                  max_catch_up=30, max_target_age=0.0, key=None, arm='mesa_left', max_skew=30.0,
-                 event_rate=1000.0, event_burst=200, ssl_context=None):
+                 event_rate=1000.0, event_burst=200, ssl_context=None, realtime_priority=0):
         if key is None:
             raise ValueError('the arm link needs a key (saras_drivers.keys)')
+        if not (isinstance(realtime_priority, int) and 0 <= realtime_priority <= 99):
+            raise ValueError('realtime_priority must be an integer in [0, 99], got %r' % (realtime_priority,))
+        self.realtime_priority = realtime_priority
+        self.realtime = False        # the server thread runs SCHED_FIFO
         self.gate = auth.SessionGate(auth.Authenticator(key, arm, max_skew), event_rate, event_burst)
         self.ssl_context = ssl_context
         self._refusal_logged = {}    # reason -> time of the last log line
@@ -415,8 +420,22 @@ class SarasArmServer(object):
                     pass
             await runner.cleanup()
 
+    def _set_realtime(self):
+        """SCHED_FIFO at ``realtime_priority`` for the calling (server) thread only: the controller it
+        stands in for has a CPU of its own; on a host shared with the platform a starved server
+        answers a hold or a closed command link late. Without the right to: normal scheduling, warned."""
+        if self.realtime_priority <= 0:
+            return
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(self.realtime_priority))
+            self.realtime = True
+        except (OSError, AttributeError) as e:
+            self.log.warning('cannot run the server thread at SCHED_FIFO %d (%s): normal scheduling',
+                             self.realtime_priority, e)
+
     def run(self):
         """Serve until :meth:`stop` (blocking)."""
+        self._set_realtime()
         self._loop = asyncio.new_event_loop()
         # the loop is this thread's current loop: aiohttp / engineio look it up while shutting down
         asyncio.set_event_loop(self._loop)
