@@ -30,8 +30,9 @@
  * arm_link (std_msgs/Bool, latched by the arm driver): false on its (re)start and while disconnected,
  * true while it forwards set-points. False is a fault, and so is its return to true: after a driver
  * or arm outage the set-point re-anchors on the measured pose at the operator's clutch, not before
- * (a clutch released while the link is down holds again). No publisher: no effect; a publisher that
- * disconnects (the driver died) is a fault, and the link stays down until a driver publishes true.
+ * (a clutch released while the link is down holds again). No publisher: no effect. The arm_link
+ * publisher's node dropping its target_pose subscription (the driver died) is a fault too, and the
+ * link stays down until a driver publishes true.
  *
  * hold (std_msgs/Bool, latched): true from a fault until the clutch release that clears it,
  * published on each change: the arm driver then stops the arm where it is instead of letting it
@@ -117,7 +118,12 @@ public:
     tf_decimation_ = static_cast<unsigned>(prm.integer("tf_decimation", 10, "set-points", { saras_common::atLeast(1) }));
 
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
-    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>("target_pose", kStreamQueue);
+    // the arm driver subscribes to the set-points: its subscription dropping (its process died: the
+    // TCP connection closed; roscpp drops a subscriber link at once, while a subscriber keeps retrying
+    // a dead publisher's link until the master tells it otherwise) is how the driver's death is seen
+    pose_pub_ = nh.advertise<geometry_msgs::PoseStamped>(
+        "target_pose", kStreamQueue, ros::SubscriberStatusCallback(),
+        [this](const ros::SingleSubscriberPublisher& reader) { onSetpointReaderGone(reader); });
     hold_pub_ = nh.advertise<std_msgs::Bool>("hold", 1, true);
     start_sub_ = nh.subscribe("start_pose", 1, &VelocityIntegratorNode::onStart, this, fast);
     twist_sub_ = nh.subscribe("tank_twist", 10, &VelocityIntegratorNode::onTwist, this, fast);
@@ -164,8 +170,10 @@ private:
       fault("console link stale");
   }
 
-  void onArmLink(const std_msgs::Bool::ConstPtr& m)
+  void onArmLink(const ros::MessageEvent<std_msgs::Bool const>& event)
   {
+    const std_msgs::Bool::ConstPtr& m = event.getConstMessage();
+    driver_name_ = event.getPublisherName();
     const bool was_down = !arm_link_ok_;
     arm_link_ok_ = m->data;
     if (!arm_link_ok_)
@@ -219,18 +227,19 @@ private:
               why.c_str());
   }
 
-  /// Timer-side supervision: arm driver gone, stale measurement, twist stream gone, collision monitoring gone.
+  /// A subscriber of the set-points went away; the arm driver (the node that publishes arm_link): it
+  /// died or unsubscribed, an event, not a timeout; the link counts as down until a driver publishes true.
+  void onSetpointReaderGone(const ros::SingleSubscriberPublisher& reader)
+  {
+    if (driver_name_.empty() || reader.getSubscriberName() != driver_name_ || !arm_link_ok_)
+      return;
+    arm_link_ok_ = false;
+    fault("arm link lost (the arm driver " + driver_name_ + " is gone)");
+  }
+
+  /// Timer-side supervision: stale measurement, twist stream gone, collision monitoring gone.
   void supervise(const ros::Time& now)
   {
-    // the driver's latched arm_link publisher disconnected: the driver died (its TCP connection
-    // closed), an event, not a timeout; the link counts as down until a driver publishes true again
-    const bool driver_there = arm_link_sub_.getNumPublishers() > 0;
-    if (driver_seen_ && !driver_there && arm_link_ok_)
-    {
-      arm_link_ok_ = false;
-      fault("arm link lost (the arm driver is gone)");
-    }
-    driver_seen_ = driver_there;
     if (!t_measured_.isZero() && (now - t_measured_).toSec() > measured_timeout_)
       fault("arm state stale (no measured pose)");
     if (!t_twist_.isZero() && (now - t_twist_).toSec() > fault_timeout_)
@@ -393,7 +402,7 @@ private:
   unsigned long count_ = 0;
   Vector6d twist_ = Vector6d::Zero();
   bool link_ok_ = true, hold_ = true, arm_link_ok_ = true;
-  bool driver_seen_ = false;  ///< the arm_link publisher was connected at the last check
+  std::string driver_name_;  ///< node that publishes arm_link (the arm driver), once heard
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::unique_ptr<MessagePool<geometry_msgs::PoseStamped>> pose_pool_;
   geometry_msgs::TransformStamped tf_;

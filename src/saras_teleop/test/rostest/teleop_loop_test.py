@@ -39,6 +39,20 @@ STATIC_FRAMES = [
 ]
 
 
+# a stand-in arm driver, run in its own process: latched arm_link true, subscribed to the set-points
+FAKE_DRIVER = """
+import rospy
+from geometry_msgs.msg import PoseStamped
+from std_msgs.msg import Bool
+rospy.init_node('fake_arms_driver', disable_signals=True)
+pub = rospy.Publisher('/mesa_left/arm_link', Bool, queue_size=1, latch=True)
+pub.publish(Bool(data=True))
+rospy.Subscriber('/mesa_left/target_pose', PoseStamped, lambda m: None, tcp_nodelay=True)
+print('ready', flush=True)
+rospy.spin()
+"""
+
+
 class Fixture(object):
     @staticmethod
     def static(parent, child, xyz, yaw):
@@ -362,11 +376,22 @@ class TeleopLoopTest(unittest.TestCase):
             after = [t[2:5] for t in fx.targets if t[0] > release]
         self.assertGreater(max(p[1] for p in after) - min(p[1] for p in after), 1e-3)  # resumed
         self.assertLess(math.dist(after[0], frozen[-1]), 1e-3)
-        # the driver dies: its latched arm_link publisher disconnects (no false is ever published)
-        fx.arm_link_pub.unregister()
-        self.wait_for(lambda: fx.holds[-1][1], 2.0, 'the hold when the arm_link publisher (the driver) is gone')
-        fx.arm_link_pub = rospy.Publisher('/mesa_left/arm_link', Bool, queue_size=2, latch=True)
-        fx.arm_link_pub.publish(Bool(data=True))          # a driver again
+        self.check_driver_killed(fx)
+
+    def check_driver_killed(self, fx):
+        """A stand-in arm driver (its own process: publishes arm_link, subscribes to the set-points) is
+        SIGKILLed, so nothing unregisters: the velocity integrator sees its subscription drop and holds."""
+        driver = subprocess.Popen([sys.executable, '-c', FAKE_DRIVER], stdout=subprocess.PIPE, text=True)
+        try:
+            self.assertEqual(driver.stdout.readline().strip(), 'ready')
+            time.sleep(1.5)                                   # the integrator connected to it
+            self.assertFalse(fx.holds[-1][1], 'hold before the driver died')
+            driver.kill()
+            self.wait_for(lambda: fx.holds[-1][1], 2.0, 'the hold when the arm driver process is killed')
+        finally:
+            driver.kill()
+            driver.wait()
+        fx.arm_link_pub.publish(Bool(data=True))              # a driver again
         time.sleep(0.5)
         self.assertTrue(fx.holds[-1][1], 'the hold ended with a new driver, without the clutch')
         fx.clutch()
