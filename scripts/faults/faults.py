@@ -287,7 +287,9 @@ def judge(out, ev, nxt_t):
         r['first set-point vs held [mm]'] = r['peak speed on recovery [mm/s]'] = r['resumed after [s]'] = '-'
     gaps = [b[0] - a[0] for a, b in zip(window(sp_r, t_f, t_back), window(sp_r, t_f, t_back)[1:])]
     r['right arm: longest set-point gap [ms]'] = '%.0f' % (1e3 * max(gaps)) if gaps else 'none'
-    coll = [float(c[1]) for c in load(out, 'collision') if t_f + 1.0 <= float(c[0]) < t_back]
+    # while the fault lasts: from 1 s after it to 0.1 s before the probe saw the arm back (the
+    # collision node may get the returning arm's first pose a few ms before the probe does)
+    coll = [float(c[1]) for c in load(out, 'collision') if t_f + 1.0 <= float(c[0]) < t_back - 0.1]
     r['collision distance left in fault'] = ('none' if not coll else 'NaN (unknown)' if all(math.isnan(c) for c in coll)
                                              else 'finite %d/%d' % (sum(not math.isnan(c) for c in coll), len(coll)))
     diags = sorted(set(d[2].split(':')[0] for d in load(out, 'diag') if t_f <= float(d[0]) < t_back + 2.0))
