@@ -11,20 +11,21 @@ process listens on the master's port: it died) or its PID changed (a restarted m
 it has been unreachable otherwise (timeouts: a loaded or partitioned host) for ``grace`` seconds.
 """
 
-import threading
 import time
 
+from saras_drivers.poller import Poller
 
-class MasterWatch(object):
+
+class MasterWatch(Poller):
     def __init__(self, probe, on_lost, period=0.2, grace=1.0, clock=time.monotonic):
-        if not (period > 0 and grace >= 0):
-            raise ValueError('period must be > 0 s and grace >= 0 s')
+        if not grace >= 0:
+            raise ValueError('grace must be >= 0 s, got %r' % (grace,))
+        Poller.__init__(self, period, 'master_watch', once=True)    # a lost master is final
         self.probe, self.on_lost = probe, on_lost
-        self.period, self.grace, self.clock = period, grace, clock
+        self.grace, self.clock = grace, clock
         self.pid = None
         self.unreachable_since = None
         self.lost = None              # reason, once lost
-        self._stop = threading.Event()
 
     def poll(self):
         """One check; returns the loss reason (also passed to on_lost once) or None."""
@@ -52,16 +53,3 @@ class MasterWatch(object):
         self.lost = reason
         self.on_lost(reason)
         return reason
-
-    def start(self):
-        t = threading.Thread(target=self._run, name='master_watch', daemon=True)
-        t.start()
-        return t
-
-    def stop(self):
-        self._stop.set()
-
-    def _run(self):
-        while not self._stop.wait(self.period):
-            if self.poll():
-                return

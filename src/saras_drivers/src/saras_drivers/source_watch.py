@@ -8,17 +8,15 @@ time the count falls from >= 1 to 0; the driver then holds the arm where it is i
 it finish the last set-point, which may lead the arm by the teleoperation's ``max_lead``.
 """
 
-import threading
+from saras_drivers.poller import Poller
 
 
-class SourceWatch(object):
+class SourceWatch(Poller):
     def __init__(self, count, on_lost, period=0.01):
-        if not period > 0:
-            raise ValueError('period must be > 0 s, got %r' % (period,))
-        self.count, self.on_lost, self.period = count, on_lost, float(period)
+        Poller.__init__(self, period, 'source_watch', once=False)  # the source may come back
+        self.count, self.on_lost = count, on_lost
         self.connected = False
         self.losses = 0
-        self._stop = threading.Event()
 
     def poll(self):
         """One check; True when the source was just lost (on_lost called)."""
@@ -29,15 +27,3 @@ class SourceWatch(object):
             self.losses += 1
             self.on_lost()
         return lost
-
-    def start(self):
-        t = threading.Thread(target=self._run, name='source_watch', daemon=True)
-        t.start()
-        return t
-
-    def stop(self):
-        self._stop.set()
-
-    def _run(self):
-        while not self._stop.wait(self.period):
-            self.poll()
