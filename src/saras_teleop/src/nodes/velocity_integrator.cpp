@@ -30,7 +30,7 @@
  * arm_link (std_msgs/Bool, latched by the arm driver): false on its (re)start and while disconnected,
  * true while it forwards set-points. False is a fault, and so is its return to true: after a driver
  * or arm outage the set-point re-anchors on the measured pose at the operator's clutch, not before
- * (a clutch released while the link is down holds again). No publisher: no effect. The arm_link
+ * (a clutch released while this link is down or the console link is stale holds again). No publisher: no effect. The arm_link
  * publisher's node dropping its target_pose subscription (the driver died) is a fault too, and the
  * link stays down until a driver publishes true.
  *
@@ -195,10 +195,10 @@ private:
     jaw_->onDevice(*m);
     const bool was_fault = vi_.faults() > clutch_faults_;
     const bool released = vi_.clutch(m->clutch);
-    if (released && !arm_link_ok_)
+    if (released && (!arm_link_ok_ || !link_ok_))  // resume only with both links up
     {
       clutch_faults_ = vi_.faults();
-      fault("arm link still down");
+      fault(arm_link_ok_ ? "console link still stale" : "arm link still down");
     }
     else if (released && was_fault)
     {

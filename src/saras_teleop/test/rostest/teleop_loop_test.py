@@ -296,6 +296,11 @@ class TeleopLoopTest(unittest.TestCase):
         ys = [t[3] for t in held]
         self.assertLess(max(ys) - min(ys), 1e-9)
         self.assertTrue(fx.holds and fx.holds[-1][1], 'hold not published while the link is stale: %s' % fx.holds)
+        n_before = len(fx.holds)
+        fx.clutch()                                   # a clutch while the link is still stale: still held
+        time.sleep(0.5)
+        self.assertTrue(all(h for _, h in fx.holds[n_before:]),
+                        'a clutch while the console link was stale released the hold: %s' % fx.holds[n_before:])
         fx.stale = False
         time.sleep(1.5)
         self.assertTrue(fx.holds[-1][1], 'the hold ended without the clutch')
