@@ -31,6 +31,36 @@ def test_a_busy_named_node_and_its_unnamed_child():
     assert proc_cpu.shares(after, after.copy() | {'wall': after['wall'] + 1})['/ns/busy'] == 0.0
 
 
+NAMED_THREAD = '''import ctypes, threading, time
+def burn():
+    ctypes.CDLL(None).prctl(15, b'endoscope_sim_l', 0, 0, 0)   # PR_SET_NAME
+    t = time.thread_time()
+    while time.thread_time() - t < 0.6: pass
+    time.sleep(30)
+threading.Thread(target=burn, daemon=True).start()
+time.sleep(30)'''
+
+
+def test_a_simulator_thread_of_a_product_process_is_counted_apart():
+    host = subprocess.Popen([sys.executable, '-c', NAMED_THREAD, '__name:=host'], start_new_session=True)
+    try:
+        time.sleep(0.2)
+        before = proc_cpu.sample([host.pid], {'/host': 'endoscope_sim'})
+        time.sleep(1.5)
+        after = proc_cpu.sample([host.pid], {'/host': 'endoscope_sim'})
+    finally:
+        os.killpg(host.pid, signal.SIGKILL)
+        host.wait()
+    cpu = proc_cpu.shares(before, after)
+    row = proc_cpu.thread_row('/host', 'endoscope_sim')
+    assert 15.0 < cpu[row] < 110.0                  # the named thread burnt CPU in the window
+    assert cpu['/host'] < 5.0                       # the rest of the process slept
+    budget = proc_cpu.parse_budget(dict(BUDGET, simulator_threads={'/host': 'endoscope_sim'}))
+    rows, total = proc_cpu.budget_rows(cpu, budget)
+    assert dict((r[0], r[1]) for r in rows)[row] == 'simulator'
+    assert total[2] == pytest.approx(cpu['/host'])
+
+
 def test_unnamed_children_count_for_their_named_parent():
     before = {'wall': 0.0, 'procs': [{'pid': 1, 'start': 5, 'name': '/rec', 'ticks': 0},
                                      {'pid': 2, 'start': 6, 'name': '/rec', 'ticks': 0}]}
@@ -62,7 +92,9 @@ def test_budget_rows_and_verdicts():
     [], {'simulators': 'x', 'budgets': {}, 'product_total': 60},
     {'simulators': [], 'budgets': {'/a': 0}, 'product_total': 60},
     {'simulators': [], 'budgets': {'/a': 'ten'}, 'product_total': 60},
-    {'simulators': [], 'budgets': {}, 'product_total': None}])
+    {'simulators': [], 'budgets': {}, 'product_total': None},
+    {'simulators': [], 'budgets': {}, 'product_total': 60, 'simulator_threads': {'/a': ''}},
+    {'simulators': [], 'budgets': {}, 'product_total': 60, 'simulator_threads': ['/a']}])
 def test_bad_budget_files_are_refused(bad):
     with pytest.raises(proc_cpu.BudgetError):
         proc_cpu.parse_budget(bad)

@@ -29,6 +29,9 @@ def test_shipped_recording_list_covers_the_deliverable():
     assert cmd[cmd.index('--buffsize') + 1] == str(cfg.buffer_mb)
     assert cmd[cmd.index('--queue') + 1] == str(cfg.queue) and cfg.queue >= 1000
     assert set(cfg.topics) <= set(cmd)
+    assert ('--tcpnodelay' in cmd) == cfg.tcp_nodelay
+    nodelay = parse_recording_config({'streams': [{'topic': '/a', 'rate': 1}], 'tcp_nodelay': True})
+    assert '--tcpnodelay' in recorder_command(nodelay, '/tmp/x.bag')
 
 
 @pytest.mark.parametrize('data, message', [
@@ -38,6 +41,7 @@ def test_shipped_recording_list_covers_the_deliverable():
     ({'streams': [{'topic': '/a', 'rate': 'fast'}]}, 'rate'),
     ({'streams': [{'topic': '/a', 'rate': 1}, {'topic': '/a', 'rate': 1}]}, 'twice'),
     ({'streams': [{'topic': '/a', 'rate': 1}], 'min_rate_fraction': 2}, 'min_rate_fraction'),
+    ({'streams': [{'topic': '/a', 'rate': 1}], 'tcp_nodelay': 'yes'}, 'tcp_nodelay'),
 ])
 def test_invalid_config(data, message):
     with pytest.raises(RecordingConfigError, match=message):

@@ -6,7 +6,10 @@ one core. Processes are named as ROS names them: ``__name:=`` of the command lin
 its ``ROS_NAMESPACE``; a helper process without a name (e.g. the ``rosbag record`` child of the
 recorder) counts for its nearest named ancestor; roslaunch and the master by their programs.
 ``budget_rows`` classifies the processes (simulators vs product) and checks each against the budgets of
-``config/cpu_budget.yaml``. Reading /proc costs a few milliseconds per sample: nothing runs in between.
+``config/cpu_budget.yaml``. A product process that hosts a simulator's threads (the simulated endoscope
+renders inside the visual-feedback nodelet manager, zero-copy like the real capture nodelet) is split:
+its threads whose name starts with the configured prefix (``simulator_threads``) form a row of their
+own, ``<process> [<prefix>* threads]``, counted as a simulator. Reading /proc costs a few milliseconds per sample: nothing runs in between.
 """
 import os
 import time
@@ -31,8 +34,15 @@ def _own_name(pid):
     return next((prog for prog in LAUNCHERS if any(os.path.basename(a) == prog for a in argv[:3])), None)
 
 
-def sample(roots):
-    """CPU ticks of every process in the trees under ``roots`` (pids): {'wall': s, 'procs': [...]}."""
+def thread_row(name, prefix):
+    """Name of the row of a process's simulator threads (see the module doc)."""
+    return '%s [%s* threads]' % (name, prefix)
+
+
+def sample(roots, split=None):
+    """CPU ticks of every process in the trees under ``roots`` (pids): {'wall': s, 'procs': [...]}.
+    ``split``: {process name: thread-name prefix} of threads counted apart (:func:`thread_row`)."""
+    split = split or {}
     stats = {}
     for pid in procfs.pids():
         st = procfs.stat(pid)
@@ -46,6 +56,11 @@ def sample(roots):
         pid, parent_label = stack.pop()
         label = _own_name(pid) or parent_label or procfs.comm(pid)
         _, ticks, start = stats[pid]
+        prefix = split.get(label)
+        if prefix is not None:
+            apart = sum(t for n, t in procfs.threads(pid).items() if n.startswith(prefix))
+            ticks -= apart
+            procs.append({'pid': pid, 'start': start, 'name': thread_row(label, prefix), 'ticks': apart})
         procs.append({'pid': pid, 'start': start, 'name': label, 'ticks': ticks})
         inherited = None if label == 'roslaunch' else label   # roslaunch's children are the nodes
         stack.extend((c, inherited) for c in children.get(pid, ()))
@@ -58,21 +73,26 @@ def shares(before, after):
     wall = after['wall'] - before['wall']
     if wall <= 0:
         raise ValueError('the second sample must be later than the first')
-    old = {(p['pid'], p['start']): p['ticks'] for p in before['procs']}
+    old = {(p['pid'], p['start'], p['name']): p['ticks'] for p in before['procs']}
     out = {}
     for p in after['procs']:
-        delta = p['ticks'] - old.get((p['pid'], p['start']), 0)
+        delta = p['ticks'] - old.get((p['pid'], p['start'], p['name']), 0)
         out[p['name']] = out.get(p['name'], 0.0) + 100.0 * delta / CLK_TCK / wall
     return out
 
 
 def parse_budget(data):
-    """Validate a budget file's content: {'simulators': [names], 'budgets': {name: %}, 'product_total': %}."""
+    """Validate a budget file's content: {'simulators': [names], 'budgets': {name: %}, 'product_total': %,
+    'simulator_threads': {process name: thread-name prefix}}."""
     if not isinstance(data, dict):
         raise BudgetError('the budget file must be a mapping')
     sims = data.get('simulators', [])
     budgets = data.get('budgets', {})
     total = data.get('product_total')
+    threads = data.get('simulator_threads', {})
+    if not isinstance(threads, dict) or not all(
+            isinstance(k, str) and k.startswith('/') and isinstance(v, str) and v for k, v in threads.items()):
+        raise BudgetError('simulator_threads: ROS name -> non-empty thread-name prefix')
     if not isinstance(sims, list) or not all(isinstance(s, str) and s.startswith('/') for s in sims):
         raise BudgetError('simulators: a list of ROS names (/ns/name)')
     if not isinstance(budgets, dict) or not all(
@@ -80,7 +100,9 @@ def parse_budget(data):
         raise BudgetError('budgets: ROS name -> percent of one core in (0, 100]')
     if not isinstance(total, (int, float)) or not 0 < total <= 200:
         raise BudgetError('product_total: percent of one core in (0, 200]')
-    return {'simulators': list(sims), 'budgets': dict(budgets), 'product_total': float(total)}
+    sims = list(sims) + [thread_row(k, v) for k, v in threads.items()]
+    return {'simulators': sims, 'budgets': dict(budgets), 'product_total': float(total),
+            'simulator_threads': dict(threads)}
 
 
 def budget_rows(cpu, budget):

@@ -26,8 +26,10 @@ class Stream(object):
 
 
 class RecordingConfig(object):
-    def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb, queue=2000):
+    def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb, queue=2000,
+                 tcp_nodelay=False):
         self.streams = streams
+        self.tcp_nodelay = tcp_nodelay
         self.queue = queue
         self.min_rate_fraction = min_rate_fraction
         self.gap_factor = gap_factor
@@ -73,7 +75,15 @@ def parse_recording_config(data, control_rate=1000.0):
                            float(_number(data, 'gap_factor', 3.0, 1.0, 100.0)),
                            int(_number(data, 'buffer_mb', 1024, 16, 65536)),
                            int(_number(data, 'chunk_kb', 4096, 64, 1048576)),
-                           int(_number(data, 'subscriber_queue', 2000, 100, 1000000)))
+                           int(_number(data, 'subscriber_queue', 2000, 100, 1000000)),
+                           _flag(data, 'tcp_nodelay', False))
+
+
+def _flag(data, key, default):
+    value = data.get(key, default)
+    if not isinstance(value, bool):
+        raise RecordingConfigError('"%s" must be true or false, got %r' % (key, value))
+    return value
 
 
 def load_recording_config(path, control_rate=1000.0):
@@ -92,9 +102,9 @@ def recorder_command(config, output, extra_topics=()):
     """argv of saras_bringup's ``bag_recorder`` (rosbag record with a ``subscriber_queue`` deep
     per-topic queue; rosbag record's fixed 100 lost bursts) for the configured streams, writing
     ``output`` (a .bag path)."""
-    return (['rosrun', 'saras_bringup', 'bag_recorder', '--tcpnodelay', '-O', output,
+    return (['rosrun', 'saras_bringup', 'bag_recorder', '-O', output,
              '--buffsize', str(config.buffer_mb), '--chunksize', str(config.chunk_kb),
-             '--queue', str(config.queue)]
+             '--queue', str(config.queue)] + (['--tcpnodelay'] if config.tcp_nodelay else [])
             + config.topics + list(extra_topics))
 
 

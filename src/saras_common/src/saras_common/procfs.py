@@ -49,3 +49,21 @@ def comm(pid):
     """Short program name of ``pid`` ('?' when it is gone)."""
     raw = _read('/proc/%d/comm' % pid)
     return raw.decode(errors='replace').strip() if raw else '?'
+
+
+def threads(pid):
+    """{thread name: utime + stime [clock ticks]} of the live threads of ``pid``, summed per name
+    (``/proc/PID/task/TID``); {} when it is gone."""
+    try:
+        tids = [int(t) for t in os.listdir('/proc/%d/task' % pid) if t.isdigit()]
+    except OSError:
+        return {}
+    out = {}
+    for tid in tids:
+        raw = _read('/proc/%d/task/%d/stat' % (pid, tid))
+        if raw is None:
+            continue
+        name = raw[raw.index(b'(') + 1:raw.rindex(b')')].decode(errors='replace')
+        fields = raw[raw.rindex(b')') + 2:].split()
+        out[name] = out.get(name, 0) + int(fields[11]) + int(fields[12])
+    return out
