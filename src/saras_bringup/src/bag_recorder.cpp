@@ -28,6 +28,7 @@
  */
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -202,11 +203,18 @@ double freeMb(const std::string& path)
   return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize) / 1048576.0;
 }
 
+/// The writer thread takes the queued messages every kWriterPoll, or at once when kWakeBytes are queued
+/// (a video frame or a burst): batches instead of one thread wake-up per 1 kHz message.
+constexpr std::chrono::milliseconds kWriterPoll(20);
+constexpr std::size_t kWakeBytes = 1024 * 1024;
+
 class BagRecorder
 {
 public:
   explicit BagRecorder(const Options& o)
-    : options_(o), queue_(o.buffer_mb * 1024 * 1024), counts_(o.topics.size(), 0), lost_(o.topics.size(), 0)
+    : options_(o)
+    , queue_(o.buffer_mb * 1024 * 1024, std::min<std::size_t>(kWakeBytes, o.buffer_mb * 1024 * 1024 / 8))
+    , counts_(o.topics.size(), 0), lost_(o.topics.size(), 0)
   {
   }
 
@@ -411,7 +419,7 @@ private:
     std::string why;
     for (;;)
     {
-      if (!queue_.pop(out, std::chrono::milliseconds(100)))
+      if (!queue_.pop(out, kWriterPoll))
       {
         if (stopping_ && queue_.size() == 0)
           return;

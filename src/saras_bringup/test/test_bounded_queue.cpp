@@ -95,6 +95,32 @@ TEST(BoundedQueue, CloseWakesAWaitingConsumer)
   EXPECT_EQ(v, 5);
 }
 
+TEST(BoundedQueue, WithAWakeThresholdSmallItemsDoNotWakeTheConsumerButLargeOnesDo)
+{
+  BoundedQueue<int> q(1000, 100);
+  std::atomic<int> got{ 0 };
+  std::atomic<bool> go_on{ true };
+  std::thread consumer([&] {
+    int v;
+    while (go_on)
+      if (q.pop(v, milliseconds(10000)))
+        got = v;
+  });
+  std::this_thread::sleep_for(milliseconds(50));
+  q.push(1, 10);  // below the threshold: the waiting consumer sleeps on (its timeout is 10 s)
+  std::this_thread::sleep_for(milliseconds(300));
+  EXPECT_EQ(got, 0);
+  EXPECT_EQ(q.size(), 1u);
+  q.push(2, 95);  // 105 bytes queued: wakes it, it drains both
+  for (int i = 0; i < 200 && got != 2; ++i)
+    std::this_thread::sleep_for(milliseconds(10));
+  EXPECT_EQ(got, 2);
+  EXPECT_EQ(q.size(), 0u);
+  go_on = false;
+  q.close();
+  consumer.join();
+}
+
 int main(int argc, char** argv)
 {
   testing::InitGoogleTest(&argc, argv);

@@ -22,18 +22,26 @@ namespace saras_bringup
  * the budget, the oldest items are dropped (dropped() counts them). pop() waits up to a timeout.
  * Thread-safe. An item larger than the whole budget is still accepted alone (everything older
  * is dropped), so a single large message never stalls the stream.
+ * With a wake threshold, push() wakes a waiting pop() only once that many bytes are queued: a consumer
+ * polling with a short timeout then takes the items in batches, instead of one thread wake-up per item
+ * (the recorder takes ~15000 small messages per second at 1 kHz).
  */
 template <class T>
 class BoundedQueue
 {
 public:
   /// @param budget_bytes largest sum of item sizes kept [bytes] (> 0)
-  explicit BoundedQueue(std::size_t budget_bytes) : budget_(budget_bytes > 0 ? budget_bytes : 1) {}
+  /// @param wake_bytes push() wakes a waiting pop() when at least this many bytes are queued (0: always)
+  explicit BoundedQueue(std::size_t budget_bytes, std::size_t wake_bytes = 0)
+    : budget_(budget_bytes > 0 ? budget_bytes : 1), wake_bytes_(wake_bytes)
+  {
+  }
 
   /// Appends @p item of @p bytes; drops the oldest items beyond the budget. Returns how many were dropped.
   std::size_t push(T item, std::size_t bytes)
   {
     std::size_t dropped = 0;
+    bool wake = false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       items_.emplace_back(std::move(item), bytes);
@@ -48,8 +56,10 @@ public:
       ++pushed_;
       if (bytes_ > peak_bytes_)
         peak_bytes_ = bytes_;
+      wake = bytes_ >= wake_bytes_;
     }
-    cv_.notify_one();
+    if (wake)
+      cv_.notify_one();
     return dropped;
   }
 
@@ -106,6 +116,7 @@ public:
 
 private:
   const std::size_t budget_;
+  const std::size_t wake_bytes_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<std::pair<T, std::size_t>> items_;
