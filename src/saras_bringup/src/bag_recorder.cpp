@@ -50,6 +50,7 @@
 #include <topic_tools/shape_shifter.h>
 
 #include "saras_bringup/bounded_queue.h"
+#include "saras_common/inline_callback_queue.h"
 
 namespace saras_bringup
 {
@@ -242,8 +243,6 @@ public:
       subscribers_.push_back(nh.subscribe(ops));
     }
     writer_ = std::thread([this] { writeLoop(); });
-    spinner_.reset(new ros::AsyncSpinner(1, &callbacks_));
-    spinner_->start();
     ROS_INFO("bag_recorder: recording %zu topics to %s (queue %u per topic, buffer %zu MB, stops below %zu MB free "
              "on %s)",
              options_.topics.size(), options_.output.c_str(), options_.queue, options_.buffer_mb,
@@ -254,8 +253,7 @@ public:
   /// or a disk fault (the bag is then closed up to the fault).
   bool stop()
   {
-    spinner_->stop();
-    subscribers_.clear();
+    subscribers_.clear();  // returns once no callback runs any more (roscpp's subscription callback lock)
     stopping_ = true;
     queue_.close();
     writer_.join();
@@ -314,7 +312,7 @@ private:
   {
     Outgoing out{ &options_.topics[index], e.getConstMessage(), e.getConnectionHeaderPtr(), ros::Time::now() };
     const std::size_t bytes = out.msg->size();
-    ++counts_[index];  // only the single spinner thread touches counts_ while recording
+    ++counts_[index];  // only roscpp's single poll thread runs this while recording (InlineCallbackQueue)
     if (queue_.push(std::move(out), bytes) > 0)
       ROS_WARN_THROTTLE(5.0, "bag_recorder: buffer of %zu MB full, oldest messages dropped (%llu so far)",
                         options_.buffer_mb, static_cast<unsigned long long>(queue_.dropped()));
@@ -455,8 +453,7 @@ private:
   std::string path_, active_path_;
   unsigned part_ = 0;
   std::chrono::steady_clock::time_point opened_, last_free_check_;
-  ros::CallbackQueue callbacks_;
-  std::unique_ptr<ros::AsyncSpinner> spinner_;
+  saras_common::InlineCallbackQueue callbacks_;  ///< onMessage runs in roscpp's poll thread: no hand-off
   std::vector<ros::Subscriber> subscribers_;
   std::vector<std::uint64_t> counts_;  ///< messages received per topic (index of Options::topics)
   std::vector<std::uint64_t> lost_;    ///< per topic, not written because of a disk fault (writer thread)

@@ -3,9 +3,9 @@
 
 The failure it guards against: a recorder process that is not scheduled for a while (SIGSTOP here,
 CPU starvation on a loaded host) then reads a burst of hundreds of messages from its sockets at
-once; a subscription queue shallower than the burst (rosbag record: 100) drops the oldest. With
-the shipped queue depth nothing is lost; with --queue 100 the same burst loses messages, which
-shows that the check detects loss. Also: the bag is closed and renamed on SIGINT, latched topics
+once; a subscription queue shallower than the burst (rosbag record: 100) drops the oldest.
+bag_recorder hands each message to its writer in roscpp's network thread and loses nothing; the
+reference, rosbag record, loses part of the same burst, which shows that the check detects loss. Also: the bag is closed and renamed on SIGINT, latched topics
 are recorded, bad arguments exit 1.
 """
 import os
@@ -41,14 +41,14 @@ class BagRecorderBurst(unittest.TestCase):
     def tearDownClass(cls):
         shutil.rmtree(cls.tmp, ignore_errors=True)
 
-    def record_burst(self, name, extra):
+    def record_burst(self, name, extra, command=('rosrun', 'saras_bringup', 'bag_recorder')):
         out = os.path.join(self.tmp, name + '.bag')
         # the previous recorder's connection must be gone, or the wait below would see it
         deadline = time.monotonic() + 20.0
         while self.pub.get_num_connections() > 0 and time.monotonic() < deadline:
             time.sleep(0.05)
         self.assertEqual(self.pub.get_num_connections(), 0, 'a previous subscriber is still connected')
-        proc = subprocess.Popen(['rosrun', 'saras_bringup', 'bag_recorder', '-O', out, '--tcpnodelay']
+        proc = subprocess.Popen(list(command) + ['-O', out, '--tcpnodelay']
                                 + extra + [TOPIC, LATCHED, '__name:=rec_' + name])
         try:
             deadline = time.monotonic() + 20.0
@@ -85,8 +85,9 @@ class BagRecorderBurst(unittest.TestCase):
         self.assertEqual(xs, [float(i) for i in range(BURST)])   # in order, none missing
         self.assertEqual(latched, ['set-up'])
 
-    def test_2_a_shallow_queue_loses_part_of_the_same_burst(self):
-        xs, _ = self.record_burst('shallow', ['--queue', '100'])
+    def test_2_rosbag_record_loses_part_of_the_same_burst(self):
+        # the binary itself: `rosbag record` is a Python wrapper that SIGSTOP would not stop
+        xs, _ = self.record_burst('reference', [], command=('/usr/lib/rosbag/record',))
         self.assertLess(len(xs), BURST)
         self.assertGreaterEqual(len(xs), 100)
 
