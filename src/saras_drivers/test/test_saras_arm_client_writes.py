@@ -86,3 +86,36 @@ def test_failed_write_is_logged_not_raised():
     c.queue.put(None)
     writer.join(10.0)
     assert not writer.is_alive()
+
+
+def test_emit_text_is_python_socketio_s():
+    """_emit_json writes the EVENT text python-socketio's emit writes, for every command payload."""
+    import pytest
+    import socketio
+    from socketio import packet as sio_packet
+    from saras_drivers import saras_arm_protocol as proto
+    from saras_drivers.saras_arm_client import _emit_json
+
+    class Eio(object):
+        def __init__(self):
+            self.sent = []
+
+        def send(self, data):
+            self.sent.append(data)
+
+    class Sio(object):
+        def __init__(self, namespaces):
+            self.namespaces, self.eio = namespaces, Eio()
+
+    payloads = [(proto.EV_SET_TARGET, proto.make_set_target(7, (0.1, -0.2, 1e-9), (0.0, 0.0, 0.6, 0.8), 1.7e9 + 0.123)),
+                (proto.EV_SET_TARGET, proto.make_set_target(2 ** 40, (1, 2, 3))),
+                (proto.EV_SET_CLIP, proto.make_set_clip(8, 0.3, float('nan'), t=12.5)),
+                (proto.EV_HOLD, {'id': 9}), (proto.EV_STATE_ACK, {'received': 30}),
+                (proto.EV_SET_MAX_VELOCITY, proto.make_set_max_velocity(10, 1.5))]
+    sio = Sio({'/': 'sid'})
+    for event, payload in payloads:
+        _emit_json(sio, event, payload)
+        ref = sio_packet.Packet(sio_packet.EVENT, namespace='/', data=[event, payload]).encode()
+        assert sio.eio.sent[-1] == ref
+    with pytest.raises(socketio.exceptions.BadNamespaceError):
+        _emit_json(Sio({}), proto.EV_HOLD, {'id': 1})
