@@ -79,6 +79,25 @@ def test_single_joints_by_hand():
     np.testing.assert_allclose(out['d'][1], [math.sin(0.55), 0, 0, math.cos(0.55)], atol=1e-12)
 
 
+@pytest.mark.parametrize('side', ['left', 'right'])
+def test_per_sample_transforms_equal_the_matrix_composition(side):
+    """Joint.xyz_quat (plain floats, used per sample by UrdfTf.moving) is the transform of
+    Joint.transform (4x4 matrices) for every joint of the arm, the quaternion with w >= 0, over
+    the joints' whole range and beyond (angles past +-pi flip the quaternion's sign)."""
+    from saras_common.transforms import quaternion_from_matrix
+    kin = sak.load(side)
+    tf = stf.UrdfTf(_urdf(side), kin.joint_names('mesa_%s/' % side))
+    rng = np.random.RandomState(5)
+    assert {j.type for j in tf.joints} >= {'revolute', 'prismatic', 'fixed'}
+    for j in tf.joints:
+        for v in list(rng.uniform(-4.0, 4.0, 25)) + [0.0, math.pi, -math.pi]:
+            xyz, quat = j.xyz_quat(v)
+            m = j.transform(v)
+            np.testing.assert_allclose(xyz, m[:3, 3], atol=1e-12)
+            np.testing.assert_allclose(quat, quaternion_from_matrix(m), atol=1e-12)
+            assert quat[3] >= 0.0 and abs(np.linalg.norm(quat) - 1.0) < 1e-12
+
+
 def test_bad_descriptions_are_clear_errors():
     with pytest.raises(ValueError, match='XML'):
         stf.UrdfTf('<robot', [])

@@ -28,7 +28,9 @@ of states in front of such a reader.
 """
 
 import collections
+import json
 import logging
+import queue
 import random
 import threading
 import time
@@ -45,13 +47,68 @@ from saras_drivers import saras_arm_protocol as proto
 
 class _InlineEngineIOClient(engineio.Client):
     """Engine.IO client that dispatches messages in its reader thread (in order, no thread per
-    message). Handlers must not block: they only count, store or hand over."""
+    message; handlers must not block: they only count, store or hand over) and, on the websocket
+    transport, writes every packet in the sender's own thread (websocket-client serialises
+    concurrent writers with its lock), in the order of the calls, instead of handing each one to a
+    writer thread through a queue (a thread wake-up per set-point). A failed write is logged; the
+    reader sees the broken connection and the client reconnects, as with the writer thread."""
+
+    def __init__(self, *args, **kwargs):
+        super(_InlineEngineIOClient, self).__init__(*args, **kwargs)
+        self._inline = False            # this connection's writer task took over the queue
+        self._inline_lock = threading.Lock()
 
     def _receive_packet(self, pkt):
         if pkt.packet_type == eio_packet.MESSAGE:
             self._trigger_event('message', pkt.data, run_async=False)
         else:
             super(_InlineEngineIOClient, self)._receive_packet(pkt)
+
+    def _send_packet(self, pkt):
+        with self._inline_lock:
+            if not (self._inline and self.state == 'connected'):
+                # handshake (before the writer task runs) or another transport: queued
+                return super(_InlineEngineIOClient, self)._send_packet(pkt)
+        self._write(pkt)
+
+    def _write(self, pkt):
+        try:
+            if pkt.binary:
+                self.ws.send_binary(pkt.encode())
+            else:
+                self.ws.send(pkt.encode())
+        except Exception as e:  # pylint: disable=broad-except
+            self.logger.warning('WebSocket write failed (%s): the connection is going down', e)
+
+    def _write_loop(self):
+        """Websocket: writes what was queued during the handshake, then switches the connection
+        to writes in the senders' threads and only waits for its end (None)."""
+        if self.current_transport != 'websocket':
+            return super(_InlineEngineIOClient, self)._write_loop()
+        with self._inline_lock:         # nothing is queued or written inline meanwhile: in order
+            while True:
+                try:
+                    pkt = self.queue.get(block=False)
+                except queue.Empty:
+                    break
+                self.queue.task_done()
+                if pkt is None:
+                    return
+                self._write(pkt)
+            self._inline = True
+        try:
+            while self.state == 'connected':
+                try:
+                    pkt = self.queue.get(timeout=1.0)
+                except queue.Empty:
+                    continue
+                self.queue.task_done()
+                if pkt is None:
+                    return
+                self._write(pkt)
+        finally:
+            with self._inline_lock:
+                self._inline = False
 
 
 def skip_utf8_validation(ws):
@@ -76,6 +133,15 @@ class _SocketIOClient(socketio.Client):
 
 class NotConnected(RuntimeError):
     pass
+
+
+def _emit_json(sio, event, payload):
+    """``sio.emit(event, payload)`` on the default namespace for a payload of plain JSON types (the
+    protocol's: never binary), the same Socket.IO EVENT text without python-socketio's packet object
+    and its recursive search for binary attachments (most of an emit's cost)."""
+    if '/' not in sio.namespaces:
+        raise socketio.exceptions.BadNamespaceError('/ is not a connected namespace.')
+    sio.eio.send('2' + json.dumps([event, payload], separators=(',', ':')))
 
 
 class SarasArmClient(object):
@@ -168,7 +234,7 @@ class SarasArmClient(object):
             self._conn_received += 1
             if self.state_window and self._conn_received % self._ack_every == 0:
                 try:
-                    self.sio.emit(proto.EV_STATE_ACK, {'received': self._conn_received})
+                    _emit_json(self.sio, proto.EV_STATE_ACK, {'received': self._conn_received})
                 except Exception:  # pylint: disable=broad-except
                     pass                         # link going down: the supervisor reconnects
 
@@ -280,7 +346,7 @@ class SarasArmClient(object):
         if not self.connected:
             return False
         try:
-            self.sio.emit(event, payload)
+            _emit_json(self.sio, event, payload)
             return True
         except Exception:
             return False

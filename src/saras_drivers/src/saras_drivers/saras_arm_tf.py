@@ -9,12 +9,21 @@ Supported joint types: ``revolute``, ``continuous``, ``prismatic`` (one axis) an
 ``mimic`` joints follow ``multiplier * q + offset``. Units: m, rad. Quaternions [x, y, z, w].
 """
 
+import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
 from saras_common.transforms import axis_angle, quaternion_from_matrix, rpy_to_matrix, translation
 
 MOVING = ('revolute', 'continuous', 'prismatic')
+
+
+def _quat_mul(a, b):
+    """Hamilton product of two quaternions (x, y, z, w)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
 
 
 class Joint(object):
@@ -25,6 +34,30 @@ class Joint(object):
         self.origin = origin
         self.axis = axis
         self.mimic = mimic          # (joint name, multiplier, offset) or None
+        # plain-float copies for :meth:`xyz_quat` (per sample; numpy's per-call overhead on 3-
+        # and 4-vectors is most of the cost there)
+        self._t = tuple(float(x) for x in origin[:3, 3])
+        self._r = tuple(tuple(float(x) for x in row) for row in origin[:3, :3])
+        self._q = tuple(float(x) for x in quaternion_from_matrix(origin))
+        self._axis = tuple(float(x) for x in axis)
+
+    def xyz_quat(self, q):
+        """parent -> child at joint position q [rad or m] as (xyz, quaternion x y z w with w >= 0),
+        the same transform as :meth:`transform` (composed as quaternions, no matrices)."""
+        if self.type == 'prismatic':
+            d = tuple(a * q for a in self._axis)
+            t = self._t
+            return (tuple(t[i] + r[0] * d[0] + r[1] * d[1] + r[2] * d[2] for i, r in enumerate(self._r)),
+                    self._q)
+        if self.type == 'fixed':
+            return self._t, self._q
+        s = math.sin(0.5 * q)
+        ax, ay, az = self._axis
+        x, y, z, w = _quat_mul(self._q, (ax * s, ay * s, az * s, math.cos(0.5 * q)))
+        n = math.sqrt(x * x + y * y + z * z + w * w)
+        if w < 0.0:
+            n = -n
+        return self._t, (x / n, y / n, z / n, w / n)
 
     def transform(self, q):
         """parent -> child [4x4] at joint position q [rad or m]."""
@@ -95,8 +128,7 @@ class UrdfTf(object):
             v = self._q(j, q)
             c = self._cache[k]
             if c is None or c[0] != v:
-                t = j.transform(v)
-                c = (v, (j.parent, j.child, t[:3, 3], quaternion_from_matrix(t)))
+                c = (v, (j.parent, j.child) + j.xyz_quat(v))
                 self._cache[k] = c
             out.append(c[1])
         return out
