@@ -45,9 +45,10 @@ class Viewers(object):
 @pytest.fixture
 def served():
     live = LiveState(THR, COL, ['tank_master', 'tank_slave'], 2.0)
-    viewers = Viewers()
+    viewers, pages = Viewers(), Viewers()
     srv = OperatorViewServer(live, '127.0.0.1', 0, update_period=0.05, max_clients=3, on_viewers=viewers,
-                             client_timeout=5.0)
+                             client_timeout=5.0, on_pages=pages)
+    srv.test_pages = pages
     srv.start()
     yield srv, live, viewers
     srv.stop()
@@ -158,11 +159,13 @@ def test_mjpeg_forwards_the_received_bytes_and_subscribes_lazily(served):
 
 
 def test_events_push_the_payload(served):
-    srv, live, _ = served
+    srv, live, viewers = served
+    assert srv.test_pages.calls == []                # energies not subscribed before a page
     conn = http.client.HTTPConnection(*srv.address, timeout=TIMEOUT)
     conn.request('GET', '/events')
     resp = conn.getresponse()
     assert resp.getheader('Content-Type') == 'text/event-stream'
+    assert srv.test_pages.wait([1]) and viewers.calls == []
     seen = []
     deadline = time.monotonic() + TIMEOUT
     while len(seen) < 2 and time.monotonic() < deadline:
@@ -172,8 +175,10 @@ def test_events_push_the_payload(served):
             d = json.loads(line[6:])['tools'][0]['distance_mm']
             if not seen or d != seen[-1]:
                 seen.append(d)
+    resp.close()
     conn.close()
     assert len(seen) == 2
+    assert srv.test_pages.wait([1, 0])               # unsubscribed when the last page left
 
 
 def test_long_lived_connections_are_limited(served):

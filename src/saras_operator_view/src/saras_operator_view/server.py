@@ -16,7 +16,9 @@ DNS rebinding.
 
 The image streams count as viewers: ``on_viewers(n)`` is called whenever the number of open image
 streams goes from 0 to 1 or back to 0, so the node subscribes to the images only while a browser
-shows them. Long-lived connections (streams and events) are limited to ``max_clients``; a client
+shows them. Likewise the event streams count as pages: ``on_pages(n)`` is called when the first page
+opens its event stream (n = 1) and when the last closes (n = 0), so that the node subscribes to the
+1 kHz tank energies only while a page shows them (/state.json alone reports them stale). Long-lived connections (streams and events) are limited to ``max_clients``; a client
 that stops reading is dropped after ``client_timeout``.
 """
 import json
@@ -104,6 +106,7 @@ class OperatorViewServer(object):
 
     def __init__(self, live, bind_address, port, update_period=0.2, max_clients=8, max_stream_rate=30.0,
                  client_timeout=10.0, clock=time.monotonic, on_viewers=None, title='SARAS operator view',
+                 on_pages=None,
                  allowed_hosts=()):
         self.live = live
         self.update_period = float(update_period)
@@ -111,6 +114,7 @@ class OperatorViewServer(object):
         self.min_frame_interval = 1.0 / float(max_stream_rate)
         self.clock = clock
         self.on_viewers = on_viewers
+        self.on_pages = on_pages
         self.counters = Counters()
         # Host names a browser may use for this page; any other is refused (DNS rebinding: a web
         # page elsewhere resolving its own name to this address cannot read the stream)
@@ -121,6 +125,7 @@ class OperatorViewServer(object):
         self._viewer_lock = threading.Lock()
         self._clients = 0
         self._viewers = 0
+        self._pages = 0
         self._stop = threading.Event()
         handler = type('Handler', (_Handler,), {'view': self, 'timeout': float(client_timeout)})
         family = socket.AF_INET6 if ':' in bind_address else socket.AF_INET
@@ -171,20 +176,29 @@ class OperatorViewServer(object):
             if self._clients >= self.max_clients:
                 return False
             self._clients += 1
-        if image:
-            with self._viewer_lock:
+        with self._viewer_lock:
+            if image:
                 self._viewers += 1
                 if self._viewers == 1 and self.on_viewers:
                     self.on_viewers(1)
+            else:
+                self._pages += 1
+                if self._pages == 1 and self.on_pages:
+                    self.on_pages(1)
         return True
 
     def release(self, image):
-        """End a connection admitted by :meth:`acquire`; the last image stream calls ``on_viewers(0)``."""
-        if image:
-            with self._viewer_lock:
+        """End a connection admitted by :meth:`acquire`; the last image stream calls ``on_viewers(0)``,
+        the last event stream ``on_pages(0)``."""
+        with self._viewer_lock:
+            if image:
                 self._viewers -= 1
                 if self._viewers == 0 and self.on_viewers:
                     self.on_viewers(0)
+            else:
+                self._pages -= 1
+                if self._pages == 0 and self.on_pages:
+                    self.on_pages(0)
         with self._lock:
             self._clients -= 1
 
