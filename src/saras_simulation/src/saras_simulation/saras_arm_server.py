@@ -405,6 +405,8 @@ class SarasArmServer(object):
                 encoded = encoded if isinstance(encoded, list) else [encoded]
             for ep in encoded:
                 await self.sio.eio.send(eio_sid, ep)
+            # as sio.emit did: let the client's writer task send it now (a queue put does not yield)
+            await asyncio.sleep(0)
 
     async def _control(self):
         """Wake at the state rate and emit the samples that are due."""
