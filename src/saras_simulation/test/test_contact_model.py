@@ -76,3 +76,15 @@ def test_surface_config_validation():
     assert s.height(np.pi / 20, 0.0) == pytest.approx(0.051)
     with pytest.raises(ValueError, match='tissue'):
         TissueSurface.from_config({'z0': 'a'})
+
+
+def test_closest_point_lies_on_the_surface_along_the_normal():
+    """The float closest-point iteration: the point is on the height field (numpy height), the
+    normal is the numpy normal there, and the tip lies along it at the signed distance."""
+    surface = TissueSurface()
+    rng = np.random.default_rng(3)
+    for p in rng.uniform([-0.08, -0.08, 0.05], [0.08, 0.08, 0.09], size=(200, 3)):
+        s, n, sd = surface.closest_point(p)
+        assert abs(s[2] - float(surface.height(s[0], s[1]))) < 1e-12
+        assert np.allclose(n, surface.normal(s[0], s[1]), atol=1e-12)
+        assert np.allclose(s + sd * n, p, atol=1e-4)      # tangent-plane projection (8 iterations)

@@ -167,12 +167,12 @@ def test_overloaded_server_grid_stays_on_real_time():
     # grid and so the sample times stay on real time (not seconds behind). Bounds hold on an idle
     # or a busy machine; how many set-points go stale is load-dependent (bench/saras_arm_rtt.py).
     model, server, port = _stream(state_rate=300.0, max_target_age=0.1)
-    emit = server.sio.emit
+    emit_state = server._emit_state     # one state sample to the subscribers (here one reader)
 
-    async def slow_emit(*args, **kwargs):
+    async def slow_emit_state():
         time.sleep(0.004)
-        await emit(*args, **kwargs)
-    server.sio.emit = slow_emit
+        await emit_state()
+    server._emit_state = slow_emit_state
     got = []
     reader = SarasArmClient('http://127.0.0.1:%d' % port, KEY, ARM, subscribe_state=True, hold_on_connect=False, role='monitor',
                             on_state=lambda s: got.append((time.time(), s['time'])))

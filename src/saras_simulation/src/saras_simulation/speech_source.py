@@ -45,6 +45,7 @@ class SpeechLikeSource(object):
         self._pitch = self.f0
         self._syllables_to_pause = 3
         self.samples_generated = 0
+        self._harmonic_cache = (None, None)
 
     def _next_segment(self):
         r = self._rng
@@ -72,16 +73,25 @@ class SpeechLikeSource(object):
         f = self._pitch * (1.0 + 0.05 * np.sin(2 * math.pi * 5.0 * tt) - 0.15 * idx / self._seg_len)
         phase = self._phase + np.cumsum(2 * math.pi * f / self.fs)
         self._phase = float(phase[-1] % (2 * math.pi))
-        out = np.zeros(n)
-        for h in range(1, int(3800 // self._pitch) + 1):
-            fh = h * self._pitch
-            amp = sum(math.exp(-0.5 * ((fh - F) / (60.0 + 0.08 * F)) ** 2) / (1 + i)
-                      for i, F in enumerate(self._formants)) + 0.02
-            out += amp * np.sin(h * phase) / math.sqrt(h)
+        hs, amps, roots = self._harmonics()
+        # all harmonics at once, then summed in harmonic order (the same sums as one at a time)
+        out = (amps * np.sin(hs * phase) / roots).sum(axis=0)
         ramp = int(0.02 * self.fs)
         env = np.minimum(1.0, np.minimum((idx + 1) / ramp, (self._seg_len - idx) / ramp))
         env = 0.5 - 0.5 * np.cos(math.pi * np.clip(env, 0.0, 1.0))
         return out * env
+
+    def _harmonics(self):
+        """Harmonic numbers, formant-shaped amplitudes and sqrt(h) of the current syllable, as
+        (H, 1) columns; computed once per syllable (they depend on its pitch and vowel only)."""
+        key = (self._pitch, self._formants)
+        if self._harmonic_cache[0] != key:
+            hs = list(range(1, int(3800 // self._pitch) + 1))
+            amps = [sum(math.exp(-0.5 * ((h * self._pitch - F) / (60.0 + 0.08 * F)) ** 2) / (1 + i)
+                        for i, F in enumerate(self._formants)) + 0.02 for h in hs]
+            col = lambda v: np.array(v, dtype=float).reshape(-1, 1)
+            self._harmonic_cache = (key, (col(hs), col(amps), col([math.sqrt(h) for h in hs])))
+        return self._harmonic_cache[1]
 
     def read(self, frames):
         """Next ``frames`` frames as int16 array of length frames * channels (interleaved)."""
