@@ -37,6 +37,7 @@ add_library(${PROJECT_NAME}_endoscope_sim
 target_include_directories(${PROJECT_NAME}_endoscope_sim PUBLIC include)
 target_include_directories(${PROJECT_NAME}_endoscope_sim SYSTEM PRIVATE ${catkin_INCLUDE_DIRS} ${EIGEN3_INCLUDE_DIRS}
   ${OpenCV_INCLUDE_DIRS})
+# catkin_LIBRARIES: saras_visual_feedback's JpegEncoder (the recorded JPEG streams, libjpeg-turbo)
 target_link_libraries(${PROJECT_NAME}_endoscope_sim ${PROJECT_NAME}_endoscope_core ${catkin_LIBRARIES}
   ${OpenCV_LIBRARIES} Threads::Threads)
 target_compile_options(${PROJECT_NAME}_endoscope_sim PRIVATE -Wall -Wextra)

@@ -4,8 +4,6 @@
 #include <cstring>
 
 #include <cv_bridge/cv_bridge.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2/LinearMath/Transform.h>
 #include <tf2_geometry_msgs/tf2_geometry_msgs.h>
@@ -195,18 +193,11 @@ bool poseSampleFromMsg(const geometry_msgs::PoseStamped& msg, const ros::Time& n
   return true;
 }
 
-bool encodeJpeg(const cv::Mat& canvas, ChannelOrder order, const std::string& encoding, int quality, cv::Mat* scratch,
-                sensor_msgs::CompressedImage* out)
+bool encodeJpeg(const cv::Mat& canvas, ChannelOrder order, const std::string& encoding, JpegEncoder* encoder,
+                sensor_msgs::CompressedImage* out, std::string* error)
 {
-  const cv::Mat* bgr = &canvas;
-  if (canvas.channels() == 4)
-    cv::cvtColor(canvas, *scratch, order == ChannelOrder::kRgb ? cv::COLOR_RGBA2BGR : cv::COLOR_BGRA2BGR);
-  else if (order == ChannelOrder::kRgb)
-    cv::cvtColor(canvas, *scratch, cv::COLOR_RGB2BGR);
-  if (canvas.channels() == 4 || order == ChannelOrder::kRgb)
-    bgr = scratch;
   out->format = encoding + "; jpeg compressed bgr8";
-  return cv::imencode(".jpg", *bgr, out->data, {cv::IMWRITE_JPEG_QUALITY, quality});
+  return encoder->encode(canvas, order, &out->data, error);
 }
 
 bool TfPointTransformer::transform(const std::string& target, const std::string& source, std::int64_t stamp_ns,

@@ -7,7 +7,6 @@
 #include <limits>
 
 #include <boost/bind/bind.hpp>
-#include <boost/make_shared.hpp>
 #include <pluginlib/class_list_macros.hpp>
 #include <sensor_msgs/CompressedImage.h>
 
@@ -92,6 +91,8 @@ void VisualFeedbackNodelet::onInit()
   it_ = std::make_shared<image_transport::ImageTransport>(getMTNodeHandle());
   eyes_[0].name = "left";
   eyes_[1].name = "right";
+  for (Eye& eye : eyes_)
+    eye.jpeg.reset(new JpegEncoder(p.jpeg_quality));  // validated in [1, 100]
   startReconfigure();
 
   // Diagnostics under this nodelet's name (not the manager's), hardware_id visual_feedback.
@@ -308,10 +309,14 @@ void VisualFeedbackNodelet::publish(Eye& eye, const sensor_msgs::ImagePtr& out, 
     eye.pub.publish(sensor_msgs::ImageConstPtr(out));
   if (eye.jpeg_pub && eye.jpeg_pub.getNumSubscribers() > 0)
   {
-    sensor_msgs::CompressedImagePtr jpeg = boost::make_shared<sensor_msgs::CompressedImage>();
+    // pooled: the encoder writes into the capacity of a previous frame's message
+    sensor_msgs::CompressedImagePtr jpeg = eye.jpeg_pool.next();
     jpeg->header = out->header;
-    if (encodeJpeg(canvas, order, out->encoding, params_.jpeg_quality, &eye.jpeg_bgr, jpeg.get()))
-      eye.jpeg_pub.publish(jpeg);
+    std::string why;
+    if (encodeJpeg(canvas, order, out->encoding, eye.jpeg.get(), jpeg.get(), &why))
+      eye.jpeg_pub.publish(sensor_msgs::CompressedImageConstPtr(jpeg));
+    else
+      NODELET_ERROR_THROTTLE(5.0, "%s/image/compressed not published: %s", eye.name.c_str(), why.c_str());
   }
 }
 

@@ -6,7 +6,7 @@
  *
  * Parameters (private; units): fps [Hz] 30 in [0.5, 120]; width, height [px] 1280 x 720;
  * camera_info_dir; left_camera_info, right_camera_info (file names, absolute or in the dir);
- * world_frame, left_frame, right_frame; jpeg_quality [0-100] 85; recorded_queue [messages] 30;
+ * world_frame, left_frame, right_frame; jpeg_quality [1-100] 85; recorded_queue [messages] 30;
  * tf_timeout [s] 0.5; parallel_eyes (bool) true; texture_size [texels] 1024; texture_extent [m] 0.30;
  * light_distance [m] 0.10; tools [{tip, rcm, radius [m]}]; bones_file ('' = saras_collision's
  * config/pelvis_vertices.txt if present); bones_frame; bones_scaling (file unit -> m) 1.0;
@@ -59,7 +59,7 @@ struct EndoscopeConfig
   std::string camera_info[2];  ///< camera_info files (left, right), resolved paths
   std::string world = "world";
   std::string frames[2] = { "endoscope/left_optical_frame", "endoscope/right_optical_frame" };
-  int jpeg_quality = 85;       ///< [0-100]
+  int jpeg_quality = 85;       ///< [1-100]
   int recorded_queue = 30;     ///< [messages] per subscriber of compressed + camera_info
   double tf_timeout = 0.5;     ///< [s]
   bool parallel_eyes = true;

@@ -122,14 +122,22 @@ private:
 };
 
 /**
- * Two persistent eye threads, each running job(eye) once per handed-out frame. handOut() refuses
- * (returns false) while either eye still works on the previous frame: frames are skipped, never
- * queued, and nothing the jobs read may change before they are done (idle() is true).
+ * The simulator's render threads, each running job(eye) once per handed-out frame: one thread
+ * named "endoscope_sim" rendering both eyes one after the other, or (parallel) one per eye named
+ * "endoscope_sim_l" / "endoscope_sim_r". The whole simulator's per-frame work (render, JPEG,
+ * publish) runs on these named threads, never on the nodelet manager's workers, so that a process
+ * table can count it apart from the nodelets sharing the manager. handOut() refuses (returns false)
+ * while an eye still works on the previous frame: frames are skipped, never queued, and nothing
+ * the jobs read may change before they are done (idle() is true).
  */
 class StereoWorkers
 {
 public:
-  explicit StereoWorkers(std::function<void(int eye)> job);
+  /// Thread names (pthread names: at most 15 characters).
+  static constexpr const char* kName = "endoscope_sim";
+  static constexpr const char* kEyeNames[2] = { "endoscope_sim_l", "endoscope_sim_r" };
+
+  StereoWorkers(std::function<void(int eye)> job, bool parallel);
   ~StereoWorkers();
   StereoWorkers(const StereoWorkers&) = delete;
   StereoWorkers& operator=(const StereoWorkers&) = delete;
@@ -140,13 +148,15 @@ public:
   bool handOut();
 
 private:
-  void loop(int eye);
+  /// Thread @p t: eye t (parallel) or both eyes (one thread).
+  void loop(int t);
   std::function<void(int)> job_;
+  bool parallel_;
   std::mutex mutex_;
   std::condition_variable cv_;
   bool pending_[2] = { false, false };
   bool quit_ = false;
-  std::thread threads_[2];
+  std::vector<std::thread> threads_;
 };
 
 }  // namespace endoscope

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <saras_common/message_pool.h>
+#include <saras_visual_feedback/jpeg_encoder.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
@@ -66,12 +67,13 @@ struct EyeMessages
   sensor_msgs::CompressedImagePtr jpeg;
 };
 
-/// One eye's outgoing messages: renders into a pooled image message, encodes a pooled JPEG.
+/// One eye's outgoing messages: renders into a pooled image message, encodes a pooled JPEG
+/// (saras_visual_feedback::JpegEncoder: libjpeg-turbo reading the BGR render as is, 4:2:0).
 class EyeOutput
 {
 public:
   /// @param info camera_info of the eye (its frame_id is the messages' frame)
-  /// @param jpeg_quality [0-100]; @param pool_size messages per pool
+  /// @param jpeg_quality [1-100]; @param pool_size messages per pool
   EyeOutput(const sensor_msgs::CameraInfo& info, int jpeg_quality, std::size_t pool_size = 4);
 
   /**
@@ -88,7 +90,7 @@ public:
 
 private:
   sensor_msgs::CameraInfo info_;
-  std::vector<int> jpeg_params_;
+  saras_visual_feedback::JpegEncoder jpeg_;
   saras_common::MessagePool<sensor_msgs::Image> images_;
   saras_common::MessagePool<sensor_msgs::CompressedImage> jpegs_;
   cv::Mat buffer_;  ///< render target when only the JPEG is wanted

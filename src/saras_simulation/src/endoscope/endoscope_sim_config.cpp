@@ -221,7 +221,7 @@ EndoscopeConfig readEndoscopeConfig(const Params& p)
     c.frames[e] = p.text(std::string(eyes[e]) + "_frame", c.frames[e], { nonEmpty() });
   }
   c.world = p.text("world_frame", c.world, { nonEmpty() });
-  c.jpeg_quality = p.integer("jpeg_quality", 85, "", { inRange(0, 100) });
+  c.jpeg_quality = p.integer("jpeg_quality", 85, "", { inRange(1, 100) });
   c.recorded_queue = p.integer("recorded_queue", 30, "messages", { inRange(1, 1000) });
   c.tf_timeout = p.number("tf_timeout", 0.5, "s", { positive() });
   c.parallel_eyes = p.flag("parallel_eyes", true);

@@ -4,6 +4,8 @@
  */
 #include "saras_simulation/endoscope_sim_core.h"
 
+#include <pthread.h>
+
 #include <cstdio>
 #include <limits>
 
@@ -110,10 +112,13 @@ double EndoscopeHealth::inputAge(double now) const
 }
 
 // ---------------------------------------------------------------------------------------------
-StereoWorkers::StereoWorkers(std::function<void(int)> job) : job_(std::move(job))
+constexpr const char* StereoWorkers::kName;
+constexpr const char* StereoWorkers::kEyeNames[2];
+
+StereoWorkers::StereoWorkers(std::function<void(int)> job, bool parallel) : job_(std::move(job)), parallel_(parallel)
 {
-  for (int e = 0; e < 2; ++e)
-    threads_[e] = std::thread(&StereoWorkers::loop, this, e);
+  for (int t = 0; t < (parallel ? 2 : 1); ++t)
+    threads_.emplace_back(&StereoWorkers::loop, this, t);
 }
 
 StereoWorkers::~StereoWorkers()
@@ -146,18 +151,22 @@ bool StereoWorkers::handOut()
   return true;
 }
 
-void StereoWorkers::loop(int eye)
+void StereoWorkers::loop(int t)
 {
+  pthread_setname_np(pthread_self(), parallel_ ? kEyeNames[t] : kName);
+  const int first = parallel_ ? t : 0, last = parallel_ ? t : 1;
   std::unique_lock<std::mutex> lock(mutex_);
   while (true)
   {
-    cv_.wait(lock, [this, eye] { return pending_[eye] || quit_; });
+    cv_.wait(lock, [this, first] { return pending_[first] || quit_; });
     if (quit_)
       return;
     lock.unlock();
-    job_(eye);
+    for (int e = first; e <= last; ++e)
+      job_(e);
     lock.lock();
-    pending_[eye] = false;
+    for (int e = first; e <= last; ++e)
+      pending_[e] = false;
   }
 }
 

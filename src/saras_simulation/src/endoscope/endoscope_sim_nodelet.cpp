@@ -19,15 +19,21 @@
  * Image stamp = TF time of the rendered camera pose (now when the pose is static), so
  * lookupTransform(world, optical, image.header.stamp) returns exactly the rendered pose.
  * Lazy: an eye is rendered only if its image_raw or compressed topic has subscribers, JPEG
- * encoded only if compressed has subscribers. With ~parallel_eyes each eye has a persistent
- * thread that renders, encodes and publishes it; the timer thread only looks up TF and hands the
- * frame out, and skips a tick (never queues) while the previous frame is not published yet.
+ * encoded only if compressed has subscribers. A persistent thread named "endoscope_sim" renders,
+ * encodes and publishes both eyes (with ~parallel_eyes one thread per eye, "endoscope_sim_l" and
+ * "endoscope_sim_r"); the timer thread only looks up TF and hands the frame out, and skips a tick
+ * (never queues) while the previous frame is not published yet. So the simulator's CPU is that of
+ * its named threads, apart from the other nodelets of a shared manager (e.g. the overlay).
  * Parameters and units: endoscope_sim_config.h (config/endoscope.yaml). A bad value throws at
  * start-up with a message naming the parameter (`nodelet standalone` then exits non-zero).
  */
+#include <pthread.h>
+
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
@@ -164,7 +170,22 @@ public:
     sensor_msgs::CameraInfo info[2] = { eyeInfo(p, cfg_, 0, name), eyeInfo(p, cfg_, 1, name) };
     scene_.reset(new StereoScene(info, cfg_, loadBones(p, cfg_, name)));
     tf_buffer_.reset(new tf2_ros::Buffer(ros::Duration(10.0)));
-    tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh, true));  // own thread: /tf off our queue
+    // own thread: /tf off our queue; started from a thread named endoscope_sim, whose name it
+    // inherits (Linux copies the creating thread's name): the simulator's /tf work is counted as its own
+    std::exception_ptr failed;
+    std::thread([&] {
+      pthread_setname_np(pthread_self(), StereoWorkers::kName);
+      try
+      {
+        tf_listener_.reset(new tf2_ros::TransformListener(*tf_buffer_, nh, true));
+      }
+      catch (...)
+      {
+        failed = std::current_exception();
+      }
+    }).join();
+    if (failed)
+      std::rethrow_exception(failed);
     tf_poses_.reset(new TfPoses(*tf_buffer_, cfg_.world));
     // the recorded streams (compressed + camera_info) get a deep queue per subscriber: a recorder
     // that stalls for a few frames must not lose them; the raw images (2.7 MB at 720p) keep 2
@@ -181,13 +202,13 @@ public:
     updater_->setHardwareID("endoscope");
     updater_->add("render", this, &EndoscopeSim::diagnose);
     sub_target_ = pnh.subscribe("target", 1, &EndoscopeSim::onTarget, this);
-    if (cfg_.parallel_eyes)
-    {
-      // parallel over the eyes, not inside each OpenCV call; process-wide (the other nodelets of
-      // a shared manager run OpenCV single-threaded too)
-      cv::setNumThreads(1);
-      workers_.reset(new StereoWorkers([this](int e) { renderAndPublish(e); }));
-    }
+    // Render, encode and publish on the simulator's own named threads (endoscope_sim, or
+    // endoscope_sim_l/_r with ~parallel_eyes), not on the manager's workers: its CPU is counted
+    // apart from the nodelets sharing the manager. OpenCV single-threaded, so that its work stays
+    // on these threads (parallel over the eyes, not inside each call); process-wide: the other
+    // nodelets of a shared manager run OpenCV single-threaded too.
+    cv::setNumThreads(1);
+    workers_.reset(new StereoWorkers([this](int e) { renderAndPublish(e); }, cfg_.parallel_eyes));
     timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.fps), &EndoscopeSim::tick, this);
   }
 
@@ -231,9 +252,9 @@ private:
     std::unique_lock<std::mutex> busy(tick_mutex_, std::try_to_lock);
     if (!busy.owns_lock())
       return;  // previous tick still running: skip, never queue
-    if (workers_ && !workers_->idle())
+    if (!workers_->idle())
     {
-      health_.skipped();  // the eye threads still render the previous frame (nothing may change)
+      health_.skipped();  // the render threads still work on the previous frame (nothing may change)
       return;
     }
     const ros::Time now = ros::Time::now();
@@ -258,16 +279,12 @@ private:
       want_raw_[e] = pub_img_[e].getNumSubscribers() > 0;
       want_jpg_[e] = pub_jpg_[e].getNumSubscribers() > 0;
     }
-    if (workers_)
-      workers_->handOut();  // idle (checked above, only this thread hands out)
-    else
-      for (int e = 0; e < 2; ++e)
-        renderAndPublish(e);
+    workers_->handOut();  // idle (checked above, only this thread hands out)
     health_.rendered(now.toSec(), frame_, cfg_.width, cfg_.height);
     status();
   }
 
-  /// Eye @p e of frame_: render, encode, publish (an eye thread, or the timer thread).
+  /// Eye @p e of frame_: render, encode, publish (on a render thread).
   void renderAndPublish(int e)
   {
     std::string error;
@@ -317,7 +334,7 @@ private:
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::Subscriber sub_target_;
   ros::Timer timer_;
-  std::unique_ptr<StereoWorkers> workers_;  ///< eye threads (~parallel_eyes); last: joined first
+  std::unique_ptr<StereoWorkers> workers_;  ///< render threads (~parallel_eyes: one per eye); last: joined first
 };
 
 /// Nodelet `saras_simulation/EndoscopeSim` (nodelet_plugins.xml).

@@ -6,7 +6,6 @@
 
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
 
 namespace saras_simulation
 {
@@ -78,7 +77,7 @@ bool StereoScene::placeBones(const Eigen::Isometry3d& T_world_bones, std::string
 
 // ---------------------------------------------------------------------------------------------
 EyeOutput::EyeOutput(const sensor_msgs::CameraInfo& info, int jpeg_quality, std::size_t pool_size)
-  : info_(info), jpeg_params_{ cv::IMWRITE_JPEG_QUALITY, jpeg_quality }, images_(pool_size), jpegs_(pool_size)
+  : info_(info), jpeg_(jpeg_quality), images_(pool_size), jpegs_(pool_size)
 {
 }
 
@@ -110,12 +109,9 @@ EyeMessages EyeOutput::produce(StereoScene& scene, int e, const StereoFrame& fra
     {
       m.jpeg = jpegs_.next();
       m.jpeg->format = "bgr8; jpeg compressed bgr8";
-      // encoded straight into the message (its capacity is reused)
-      if (!cv::imencode(".jpg", *target, m.jpeg->data, jpeg_params_))
-      {
+      // encoded straight into the message (its capacity is reused), BGR read as is
+      if (!jpeg_.encode(*target, saras_visual_feedback::ChannelOrder::kBgr, &m.jpeg->data, &error))
         m.jpeg.reset();
-        error = "JPEG encoding failed";
-      }
     }
   }
   catch (const std::exception& ex)

@@ -4,9 +4,12 @@
  *        saras_common::Params from a map, the pose/stamp policy over a table of poses, health
  *        decisions, eye-thread pacing, and the outgoing messages (only what is wanted, pooled).
  */
+#include <pthread.h>
+
 #include <atomic>
 #include <chrono>
 #include <map>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -244,15 +247,35 @@ TEST(Health, LevelsMessagesAndCounters)
 }
 
 // ------------------------------------------------------------------------------------------
-TEST(StereoWorkers, BothEyesRunOncePerFrameAndABusyFrameIsRefused)
+namespace
+{
+/// Name of the calling thread (pthread_getname_np).
+std::string threadName()
+{
+  char name[16] = {};
+  pthread_getname_np(pthread_self(), name, sizeof(name));
+  return name;
+}
+
+/// Both eyes run once per handed-out frame, on threads named endoscope_sim (one thread) or
+/// endoscope_sim_l / _r (parallel), and a frame handed out while busy is refused.
+void checkWorkers(bool parallel)
 {
   std::atomic<int> runs[2] = { { 0 }, { 0 } };
   std::atomic<bool> release{ false };
-  StereoWorkers w([&](int e) {
-    while (!release)
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    ++runs[e];
-  });
+  std::mutex names_mutex;
+  std::string names[2];
+  StereoWorkers w(
+      [&](int e) {
+        {
+          std::lock_guard<std::mutex> lock(names_mutex);
+          names[e] = threadName();
+        }
+        while (!release)
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        ++runs[e];
+      },
+      parallel);
   EXPECT_TRUE(w.idle());
   EXPECT_TRUE(w.handOut());
   EXPECT_FALSE(w.idle());
@@ -264,7 +287,22 @@ TEST(StereoWorkers, BothEyesRunOncePerFrameAndABusyFrameIsRefused)
   ASSERT_TRUE(w.idle());
   EXPECT_EQ(runs[0], 1);
   EXPECT_EQ(runs[1], 1);
+  std::lock_guard<std::mutex> lock(names_mutex);
+  EXPECT_EQ(names[0], parallel ? "endoscope_sim_l" : "endoscope_sim");
+  EXPECT_EQ(names[1], parallel ? "endoscope_sim_r" : "endoscope_sim");
+  EXPECT_NE(threadName(), names[0]);  // not the caller's thread
   EXPECT_TRUE(w.handOut());
+}
+}  // namespace
+
+TEST(StereoWorkers, OneNamedThreadRunsBothEyesOncePerFrame)
+{
+  checkWorkers(false);
+}
+
+TEST(StereoWorkers, TwoNamedThreadsRunOneEyeEachOncePerFrame)
+{
+  checkWorkers(true);
 }
 
 // ------------------------------------------------------------------------------------------

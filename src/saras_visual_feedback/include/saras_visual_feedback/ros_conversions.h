@@ -17,6 +17,7 @@
 #include <tf2_ros/buffer.h>
 
 #include "saras_visual_feedback/frame_composer.h"
+#include "saras_visual_feedback/jpeg_encoder.h"
 #include "saras_visual_feedback/pose_history.h"
 #include "saras_visual_feedback/raw_projector.h"
 #include "saras_visual_feedback/stereo_contact.h"
@@ -82,9 +83,10 @@ bool prepareCanvas(const sensor_msgs::ImageConstPtr& image, saras_common::Messag
 bool poseSampleFromMsg(const geometry_msgs::PoseStamped& msg, const ros::Time& now, TimedPose* sample,
                        std::string* error);
 
-/// JPEG of @p canvas (any channel order) into @p out (format "<encoding>; jpeg compressed bgr8").
-bool encodeJpeg(const cv::Mat& canvas, ChannelOrder order, const std::string& encoding, int quality, cv::Mat* scratch,
-                sensor_msgs::CompressedImage* out);
+/// JPEG of @p canvas (any channel order, no conversion copy) by @p encoder into @p out (format
+/// "<encoding>; jpeg compressed bgr8", as compressed_image_transport); false (reason in @p error) on failure.
+bool encodeJpeg(const cv::Mat& canvas, ChannelOrder order, const std::string& encoding, JpegEncoder* encoder,
+                sensor_msgs::CompressedImage* out, std::string* error);
 
 /// PointTransformer over a tf2 buffer; never blocks (no timeout), falls back to the latest transform.
 class TfPointTransformer : public PointTransformer

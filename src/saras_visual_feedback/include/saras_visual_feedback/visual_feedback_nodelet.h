@@ -26,6 +26,7 @@
 
 #include "saras_visual_feedback/VisualFeedbackConfig.h"
 #include "saras_visual_feedback/frame_composer.h"
+#include "saras_visual_feedback/jpeg_encoder.h"
 #include "saras_visual_feedback/ros_conversions.h"
 #include "saras_visual_feedback/tool_scene.h"
 #include "saras_visual_feedback/visual_feedback_params.h"
@@ -49,9 +50,10 @@ private:
     /// <name>/image/compressed encoded here, only when image_transport's compressed plugin is not
     /// active (not installed, or disabled by <name>/image/disable_pub_plugins).
     ros::Publisher jpeg_pub;
-    cv::Mat jpeg_bgr;          ///< colour-conversion buffer for the JPEG encoder
+    std::unique_ptr<JpegEncoder> jpeg;  ///< encoder of jpeg_pub (~jpeg_quality)
     /// Output buffers, reused once every subscriber released them (publisher queue + viewers).
     saras_common::MessagePool<sensor_msgs::Image> pool{6};
+    saras_common::MessagePool<sensor_msgs::CompressedImage> jpeg_pool{4};  ///< JPEG buffers, reused
     HudCache hud;              ///< rendered HUD text, redrawn on change only
     std::mutex mutex;          ///< serialises this eye's callback
     EyeCamera camera;          ///< touched only by this eye's callback
