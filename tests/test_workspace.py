@@ -61,6 +61,36 @@ def test_scripts_are_installed(pkg):
             assert globbed or ('scripts/' + name) in cmake, '%s/scripts/%s is not installed' % (pkg, name)
 
 
+def _python_programs():
+    """Every Python executable of a package's scripts/ or test/ tree (shebang names python)."""
+    for pkg in PACKAGES:
+        for sub in ('scripts', 'test'):
+            for root, dirs, files in os.walk(os.path.join(WS, 'src', pkg, sub)):
+                dirs[:] = [d for d in dirs if d != '__pycache__']
+                for name in files:
+                    path = os.path.join(root, name)
+                    if name.endswith('.py') or not os.access(path, os.X_OK):
+                        continue
+                    with open(path, 'rb') as f:
+                        first = f.readline()
+                    if first.startswith(b'#!') and b'python' in first:
+                        yield os.path.relpath(path, WS)
+
+
+def test_every_python_program_compiles():
+    """Node scripts without a .py suffix are imported by no pytest: a syntax error in one would
+    only show when a launch file starts it."""
+    programs = list(_python_programs())
+    assert len(programs) > 20
+    for rel in programs:
+        with open(os.path.join(WS, rel)) as f:
+            source = f.read()
+        try:
+            compile(source, rel, 'exec')
+        except SyntaxError as exc:
+            pytest.fail('%s does not compile: %s' % (rel, exc))
+
+
 def _launch_nodes(args):
     import roslaunch.config
     import roslaunch.xmlloader
