@@ -86,29 +86,31 @@ class _InlineEngineIOClient(engineio.Client):
         if self.current_transport != 'websocket':
             return super(_InlineEngineIOClient, self)._write_loop()
         with self._inline_lock:         # nothing is queued or written inline meanwhile: in order
-            while True:
-                try:
-                    pkt = self.queue.get(block=False)
-                except queue.Empty:
-                    break
-                self.queue.task_done()
-                if pkt is None:
-                    return
-                self._write(pkt)
+            if not self._write_queued(block=False):
+                return
             self._inline = True
         try:
             while self.state == 'connected':
-                try:
-                    pkt = self.queue.get(timeout=1.0)
-                except queue.Empty:
-                    continue
-                self.queue.task_done()
-                if pkt is None:
+                if not self._write_queued(block=True):
                     return
-                self._write(pkt)
         finally:
             with self._inline_lock:
                 self._inline = False
+
+    def _write_queued(self, block):
+        """Writes the queued packets (waiting up to 1 s for one when ``block``) until the queue is
+        empty; False once the end of the connection (None) was taken."""
+        while True:
+            try:
+                pkt = self.queue.get(timeout=1.0) if block else self.queue.get(block=False)
+            except queue.Empty:
+                return True
+            self.queue.task_done()
+            if pkt is None:
+                return False
+            self._write(pkt)
+            if block:
+                return True
 
 
 def skip_utf8_validation(ws):
