@@ -30,6 +30,7 @@ struct ReceiverConfig
   double status_rate = 10.0;                 ///< [Hz] touchball/status
   double joint_states_rate = 100.0;          ///< [Hz] touch_<side>/joint_states (0 = off)
   bool publish_tf = true;                    ///< broadcast touch_<side>/base -> stylus
+  double tf_rate = 100.0;                    ///< [Hz] that TF on /tf (0 = every packet); touchball/tf: every packet
   int publish_queue_size = 0;                ///< outgoing queue per subscriber of the per-packet topics (0 = 100)
   int realtime_priority = 10;                ///< SCHED_FIFO priority of the receive thread (0 = normal)
 };

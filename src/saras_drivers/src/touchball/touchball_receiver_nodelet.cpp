@@ -15,11 +15,17 @@
  * (boost::shared_ptr: zero-copy to nodelets in the same manager, e.g. the teleoperation's
  * tf_transformer), in this order (the teleoperation path first):
  *
- *   /tf                       touch_<side>/base -> touch_<side>/stylus, both sides in one TFMessage
+ *   touchball/tf              tf2_msgs/TFMessage: touch_<side>/base -> touch_<side>/stylus, both sides in
+ *                             one message (the teleoperation's tf_transformers listen here: remap /tf)
  *   touchball/<side>/state    saras_msgs/HapticDeviceState (frame touch_<side>/base)
  *   touchball/<side>/pose     geometry_msgs/PoseStamped
  *   touchball/<side>/twist    geometry_msgs/TwistStamped   [m/s, rad/s] in touch_<side>/base
- *   touchball/<side>/buttons  sensor_msgs/Joy               buttons [clutch, clip], axes [clip angle rad]
+ *
+ * The same stylus TF goes to /tf at ~tf_rate only (rviz, the recording and the platform's other TF
+ * listeners, which would otherwise each deserialise 1000 TF messages/s; the state topics carry every
+ * sample). touchball/<side>/buttons (sensor_msgs/Joy, latched: buttons [clutch, clip], axes [clip angle
+ * rad] at that packet) is published when a button changes (and at the first packet), as the dVRK's
+ * button events.
  *
  * and answers each accepted packet with a command packet (sent before the non-TF topics) carrying
  * the latest touchball/<side>/wrench_cmd (geometry_msgs/WrenchStamped in touch_<side>/base, TCP_NODELAY;
@@ -46,6 +52,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -154,6 +161,7 @@ private:
   struct Side
   {
     ros::Publisher pub_state, pub_pose, pub_twist, pub_buttons, pub_js;
+    std::int64_t buttons = -1;  ///< bit mask last published on pub_buttons (-1: none yet)
     ros::Subscriber sub_wrench;
     std::unique_ptr<saras_common::MessagePool<saras_msgs::HapticDeviceState>> state;
     std::unique_ptr<saras_common::MessagePool<geometry_msgs::PoseStamped>> pose;
@@ -176,7 +184,7 @@ private:
       s.pub_state = nh.advertise<saras_msgs::HapticDeviceState>(tns + "state", qs);
       s.pub_pose = nh.advertise<geometry_msgs::PoseStamped>(tns + "pose", qs);
       s.pub_twist = nh.advertise<geometry_msgs::TwistStamped>(tns + "twist", qs);
-      s.pub_buttons = nh.advertise<sensor_msgs::Joy>(tns + "buttons", qs);
+      s.pub_buttons = nh.advertise<sensor_msgs::Joy>(tns + "buttons", qs, true);
       makeRings(i, s);
       geometry_msgs::TransformStamped tr;
       tr.header.frame_id = frames_[i];
@@ -197,7 +205,10 @@ private:
     }
     tf_.reset(new saras_common::MessagePool<tf2_msgs::TFMessage>(kPoolSize, tf));
     if (cfg_.publish_tf)
+    {
       pub_tf_ = nh.advertise<tf2_msgs::TFMessage>("/tf", qs);
+      pub_tf_all_ = nh.advertise<tf2_msgs::TFMessage>(ns + "touchball/tf", qs);
+    }
     pub_status_ = nh.advertise<saras_msgs::ComponentStatus>(ns + "touchball/status", 10);
   }
 
@@ -341,7 +352,14 @@ private:
       t.transform.rotation.z = d.orientation[2];
       t.transform.rotation.w = d.orientation[3];
     }
+    pub_tf_all_.publish(m);
+    if (cfg_.tf_rate > 0.0 && stamp < next_tf_)
+      return;
     pub_tf_.publish(m);
+    // next /tf at the following multiple of the period (no catch-up burst after a gap)
+    next_tf_ += ros::Duration(cfg_.tf_rate > 0.0 ? 1.0 / cfg_.tf_rate : 0.0);
+    if (next_tf_ <= stamp)
+      next_tf_ = stamp + ros::Duration(cfg_.tf_rate > 0.0 ? 1.0 / cfg_.tf_rate : 0.0);
   }
 
   void sendCommand(const Endpoint& src)
@@ -394,7 +412,7 @@ private:
     }
   }
 
-  /// pose, twist and buttons of one side, copied from its state message.
+  /// pose, twist and (when they changed) buttons of one side, copied from its state message.
   static void publishDerived(Side& s, const saras_msgs::HapticDeviceState& st, const DeviceState& d)
   {
     const boost::shared_ptr<geometry_msgs::PoseStamped> pose = s.pose->next();
@@ -405,6 +423,9 @@ private:
     twist->header.stamp = st.header.stamp;
     twist->twist = st.twist;
     s.pub_twist.publish(twist);
+    if (static_cast<std::int64_t>(d.buttons) == s.buttons)
+      return;
+    s.buttons = static_cast<std::int64_t>(d.buttons);
     const boost::shared_ptr<sensor_msgs::Joy> joy = s.joy->next();
     joy->header.stamp = st.header.stamp;
     joy->axes[0] = static_cast<float>(d.clip_angle);
@@ -490,7 +511,8 @@ private:
   std::array<std::string, kDevices> frames_;
   std::array<Side, kDevices> sides_;
   std::unique_ptr<saras_common::MessagePool<tf2_msgs::TFMessage>> tf_;
-  ros::Publisher pub_tf_, pub_status_;
+  ros::Publisher pub_tf_, pub_tf_all_, pub_status_;
+  ros::Time next_tf_;  ///< receive thread: stamp from which the next stylus TF goes to /tf
   ros::SteadyTimer status_timer_, js_timer_;
   // receive thread only:
   std::thread thread_;

@@ -49,6 +49,7 @@ ReceiverConfig readReceiverConfig(const saras_common::Params& p)
   c.status_rate = p.number("status_rate", c.status_rate, "Hz", { positive() });
   c.joint_states_rate = p.number("joint_states_rate", c.joint_states_rate, "Hz", { nonNegative() });
   c.publish_tf = p.flag("publish_tf", c.publish_tf);
+  c.tf_rate = p.number("tf_rate", c.tf_rate, "Hz", { nonNegative() });
   c.publish_queue_size = p.integer("publish_queue_size", c.publish_queue_size, "", { inRange(0, 100000) });
   c.realtime_priority = p.integer("realtime_priority", c.realtime_priority, "", { inRange(0, 99) });
   return c;

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """rostest: a 1 kHz console stream in => EVERY control topic published once per packet at 1 kHz
-(the 8 touchball/<side>/{state,pose,twist,buttons} topics and /tf, both sides in one TFMessage),
-with the values sent; the decimated rviz topic touch_<side>/joint_states at ~joint_states_rate;
+(the 6 touchball/<side>/{state,pose,twist} topics and touchball/tf, both sides in one TFMessage),
+with the values sent; the decimated topics touch_<side>/joint_states at ~joint_states_rate and /tf
+at ~tf_rate; touchball/<side>/buttons once per change of the buttons (latched);
 each packet answered with a command packet carrying the published wrench_cmd; /diagnostics
 counts every packet and reports the packet rate.
 
@@ -24,6 +25,7 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import WrenchStamped
+from sensor_msgs.msg import Joy
 
 from saras_drivers import touchball_protocol as tp
 from saras_msgs.msg import HapticDeviceState
@@ -33,8 +35,9 @@ RATE = 1000.0
 DURATION = 3.0
 LOSS_TOLERANCE = 0.98   # fraction of the accepted packets this test must receive on every control topic
 CONTROL = ['/touchball/%s/%s' % (s, t) for s in ('left', 'right')
-           for t in ('pose', 'state', 'twist', 'buttons')] + ['/tf']
-DECIMATED = ['/touch_left/joint_states', '/touch_right/joint_states']
+           for t in ('pose', 'state', 'twist')] + ['/touchball/tf']
+DECIMATED = {'/touch_left/joint_states': 'joint_states_rate', '/touch_right/joint_states': 'joint_states_rate',
+             '/tf': 'tf_rate'}
 STAMP = struct.Struct('<II')
 
 
@@ -113,11 +116,12 @@ class TestRate(unittest.TestCase):
         states = []
         rospy.Subscriber('/touchball/left/state', HapticDeviceState, states.append, queue_size=10000,
                          tcp_nodelay=True)
-        rec = dict((t, StampRecorder(8 if t == '/tf' else 4, t.endswith('state')))
-                   for t in CONTROL + DECIMATED)
+        rec = dict((t, StampRecorder(8 if t.endswith('/tf') else 4, t.endswith('state')))
+                   for t in CONTROL + list(DECIMATED))
         for t, r in rec.items():
             rospy.Subscriber(t, rospy.AnyMsg, r, queue_size=10000, tcp_nodelay=True)
-        js_rate = rospy.get_param('~joint_states_rate')
+        buttons = []
+        rospy.Subscriber('/touchball/left/buttons', Joy, buttons.append, queue_size=10000)
         wrench_pub = rospy.Publisher('/touchball/left/wrench_cmd', WrenchStamped, queue_size=1)
         console = FakeConsole(self.port, self.cmd_port)
         self.assertTrue(console.connect(), 'no session (handshake)')
@@ -164,7 +168,8 @@ class TestRate(unittest.TestCase):
                              1e3 * gaps[-1]))
             self.assertGreater(r, 0.95 * RATE, topic)
             self.assertLess(r, 1.05 * RATE, topic)
-        for topic in DECIMATED:
+        for topic, param in DECIMATED.items():
+            js_rate = rospy.get_param('~' + param)
             win = [x for x in rec[topic].stamps if t_first <= x <= t_last]
             r = len(win) / (t_last - t_first)      # one message per timer period with a new packet
             gaps = sorted(b - a for a, b in zip(win, win[1:]))
@@ -187,7 +192,21 @@ class TestRate(unittest.TestCase):
         # the device rotates about z at 0.5 rad/s (sender time): the twist estimate sees it
         self.assertAlmostEqual(last.twist.angular.z, 0.5, delta=0.02)
         self.check_commands(console, accepted)
+        self.check_buttons(buttons, [m for m in fresh if m.header.stamp.to_sec() >= t_first])
         console.close()
+
+    def check_buttons(self, buttons, states):
+        """buttons: one message per change of the clutch in the measured window (the fake console
+        toggles it every second), each equal to the state's at that packet, never two equal in a row."""
+        # (this test's state subscriber may miss a packet: a change is then seen at most a few ms late)
+        changes = [m for a, m in zip(states, states[1:]) if m.clutch != a.clutch]
+        events = [b for b in buttons if b.header.stamp > states[0].header.stamp]
+        self.assertGreaterEqual(len(changes), 2)
+        self.assertEqual(len(events), len(changes))
+        for b, m in zip(events, changes):
+            self.assertEqual(b.buttons[0], int(m.clutch))
+            self.assertTrue(0.0 <= (m.header.stamp - b.header.stamp).to_sec() < 0.05)
+        self.assertTrue(all(a.buttons != b.buttons for a, b in zip(buttons, buttons[1:])))
 
 
 if __name__ == '__main__':

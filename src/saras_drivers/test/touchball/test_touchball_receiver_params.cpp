@@ -80,5 +80,7 @@ TEST(ReceiverParams, BadValuesNameParameterValueUnitAndRule)
   EXPECT_NE(error({ { "realtime_priority", XmlRpc::XmlRpcValue(100) } }).find("realtime_priority"), std::string::npos);
   EXPECT_NE(error({ { "status_rate", XmlRpc::XmlRpcValue(0.0) } }).find("status_rate"), std::string::npos);
   EXPECT_EQ(error({ { "joint_states_rate", XmlRpc::XmlRpcValue(0.0) } }), "accepted");  // 0 = off
+  EXPECT_NE(error({ { "tf_rate", XmlRpc::XmlRpcValue(-1.0) } }).find("tf_rate = -1 [Hz] is invalid"), std::string::npos);
+  EXPECT_EQ(error({ { "tf_rate", XmlRpc::XmlRpcValue(0.0) } }), "accepted");  // 0 = every packet
   EXPECT_NE(error({}, false).find("/touchball_receiver/key_file"), std::string::npos);  // no key: no start
 }

@@ -33,11 +33,13 @@ namespace node
 {
 using saras_common::MessagePool;
 
-/// Outgoing queue of the control-stream publishers, per subscriber connection [messages]: 0.1 s at
-/// 1 kHz, 0.4 s at 250 Hz. It only fills while a TCP subscriber (e.g. the recorder) or this process's
-/// writer thread is stalled; with ROS's 10 such a stall of 10 ms at 1 kHz already lost samples in the
-/// bag. In-manager (zero-copy) subscribers never queue here.
-constexpr uint32_t kStreamQueue = 100;
+/// Outgoing queue of the control-stream publishers, per subscriber connection [messages]: 1 s at
+/// 1 kHz. It only fills while a TCP subscriber (e.g. the recorder) is stalled; with 100 a recorder
+/// descheduled for 100 ms on a saturated 2-core host lost a burst of samples in the bag (make demo at
+/// 1 kHz: 61-100 per stream). The serialised messages are ~100-200 bytes. Subscribers that want only
+/// the newest message (the arm driver's set-point) drop the older ones on their side. In-manager
+/// (zero-copy) subscribers never queue here.
+constexpr uint32_t kStreamQueue = 1000;
 
 /// A 6-vector parameter: a list of 6 numbers, or one number used for every entry (each checked by @p rules).
 inline Vector6d paramVector6(const saras_common::Params& p, const std::string& name, const Vector6d& def,
