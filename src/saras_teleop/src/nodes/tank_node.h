@@ -13,6 +13,11 @@
  * i.e. each device sample; slave: the desired twist) and publishes that channel at once, with the
  * trigger's stamp; a timer at ~rate steps the tank if no input triggered a step for 1.5 periods and
  * then publishes the (safe) output of the channels whose trigger input is older than ~input_timeout.
+ * The exchange (pout, ereq, energy) goes out once per control cycle: from the steps while every
+ * channel's trigger flows (after every channel stepped once, or when a channel steps again before the
+ * others), so that it follows the device samples as the outputs do and needs no timer tick (a late
+ * tick on a loaded host would thin it out); from the timer, once per tick, while a trigger is
+ * missing (older than 1.5 periods).
  * Energy exchange: a pout message carries the energy sent since the previous one divided by the
  * exchange period 1/rate [W]; the receiver credits msg * (1/rate) [J] once per message, so a lost or
  * delayed packet can only lose energy, never duplicate it (a latched power would).
@@ -177,6 +182,7 @@ public:
     ereq_pub_ = nh.advertise<std_msgs::Float32>("ereq", kStreamQueue);
     energy_pub_ = nh.advertise<std_msgs::Float64>("energy", kStreamQueue);
     last_step_ = ros::Time::now();
+    cycle_.assign(channels.size(), false);
     timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TankNode::onTimer, this);
     health_.reset(new Health(nh, pnh, name, "energy tank",
                              [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
@@ -231,6 +237,7 @@ private:
     ros::Publisher pub;
     std::unique_ptr<MessagePool<typename Traits::Output>> pool;  // zero-copy publishing in a manager
     ros::Time t_des, t_conj;  // arrival times (ROS clock)
+    ros::Time t_trigger;      // last step triggered by this port's input
     ros::Time stamp;          // header stamp propagated to the output
     Vector6d des = Vector6d::Zero(), conj = Vector6d::Zero();
     std::unique_ptr<ForceGate> gate;  // tank_slave: contact-force plausibility
@@ -363,14 +370,34 @@ private:
   void stepAndPublish(std::size_t i)
   {
     const ros::Time now = ros::Time::now();
+    const bool flowing = triggersFlow(now);
+    if (flowing && cycle_[i])  // this channel steps again before the others did: close the cycle
+      publishExchange();
     step(now);
     publishPort(i, ports_[i].stamp);
     last_trigger_ = now;
+    ports_[i].t_trigger = now;
+    if (!flowing)
+      return;
+    cycle_[i] = true;
+    if (std::find(cycle_.begin(), cycle_.end(), false) == cycle_.end())
+      publishExchange();
+  }
+
+  /// Every channel's trigger input stepped the tank within the last 1.5 periods.
+  bool triggersFlow(const ros::Time& now) const
+  {
+    for (const Port& pt : ports_)
+      if (pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > 1.5 * period_)
+        return false;
+    return true;
   }
 
   void onTimer(const ros::SteadyTimerEvent&)
   {
     const ros::Time now = ros::Time::now();
+    if (triggersFlow(now))
+      return;  // the steps follow the inputs and carry the exchange
     if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
     {
       step(now);
@@ -383,7 +410,15 @@ private:
           publishPort(i, ros::Time());
       }
     }
-    // energy exchange: what was sent since the last message, as power over the exchange period
+    publishExchange();
+  }
+
+  /// Energy exchange with the peer tank (pout, ereq) and the energy: what was sent since the last
+  /// message, as power over the exchange period (the peer credits msg * period: exact whatever the
+  /// messages' timing); starts a new control cycle.
+  void publishExchange()
+  {
+    std::fill(cycle_.begin(), cycle_.end(), false);
     pout_msg_.data = static_cast<float>(outbox_ / period_);
     outbox_ -= static_cast<double>(pout_msg_.data) * period_;  // keep the float rounding for next time
     pout_pub_.publish(pout_msg_);
@@ -439,6 +474,7 @@ private:
   ros::Subscriber pin_sub_, ereq_sub_;
   ros::Publisher pout_pub_, ereq_pub_, energy_pub_;
   ros::SteadyTimer timer_;
+  std::vector<bool> cycle_;  // channels stepped since the last exchange (while every trigger flows)
   std_msgs::Float32 pout_msg_, ereq_msg_;
   std_msgs::Float64 energy_msg_;
   std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
