@@ -17,7 +17,7 @@
  * channel's trigger flows (after every channel stepped once, or when a channel steps again before the
  * others), so that it follows the device samples as the outputs do and needs no timer tick (a late
  * tick on a loaded host would thin it out); from the timer, once per tick, while a trigger is
- * missing (older than 1.5 periods).
+ * missing (older than 10 periods).
  * Energy exchange: a pout message carries the energy sent since the previous one divided by the
  * exchange period 1/rate [W]; the receiver credits msg * (1/rate) [J] once per message, so a lost or
  * delayed packet can only lose energy, never duplicate it (a latched power would).
@@ -384,11 +384,12 @@ private:
       publishExchange();
   }
 
-  /// Every channel's trigger input stepped the tank within the last 1.5 periods.
+  /// Every channel's trigger input stepped the tank within the last kFlowPeriods periods (inputs a
+  /// few periods late on a loaded host still flow: their next cycle carries the exchange, exactly).
   bool triggersFlow(const ros::Time& now) const
   {
     for (const Port& pt : ports_)
-      if (pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > 1.5 * period_)
+      if (pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > kFlowPeriods * period_)
         return false;
     return true;
   }
@@ -396,8 +397,6 @@ private:
   void onTimer(const ros::SteadyTimerEvent&)
   {
     const ros::Time now = ros::Time::now();
-    if (triggersFlow(now))
-      return;  // the steps follow the inputs and carry the exchange
     if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
     {
       step(now);
@@ -410,7 +409,8 @@ private:
           publishPort(i, ros::Time());
       }
     }
-    publishExchange();
+    if (!triggersFlow(now))  // else the steps follow the inputs and carry the exchange
+      publishExchange();
   }
 
   /// Energy exchange with the peer tank (pout, ereq) and the energy: what was sent since the last
@@ -467,7 +467,8 @@ private:
       s.add("contact force violations", violations);
   }
 
-  static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
+  static constexpr std::size_t kPoolSize = 16;
+  static constexpr double kFlowPeriods = 10.0;  // triggersFlow() window [periods]  // > subscriber queue sizes (10)
   std::unique_ptr<EnergyTank> tank_;
   EnergyJournal journal_;  // the energy after every step, for a restart
   std::vector<Port> ports_;

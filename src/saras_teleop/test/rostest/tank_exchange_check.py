@@ -52,7 +52,7 @@ class TankExchange(unittest.TestCase):
             cycles += 1
             time.sleep(1.0 / INPUT_RATE)
         t1 = time.monotonic()
-        time.sleep(0.5)
+        time.sleep(1.0)         # the triggers count as flowing for 10 periods (0.5 s here)
         t2 = time.monotonic()
         time.sleep(2.0)
         t3 = time.monotonic()
