@@ -74,6 +74,7 @@ BagWriter::BagWriter(const BagWriterOptions& o, const std::vector<std::string>& 
   , types_(topics.size())
   , queue_(o.buffer_mb * 1024 * 1024, std::min<std::size_t>(kWakeBytes, o.buffer_mb * 1024 * 1024 / 8))
   , counts_(topics.size())
+  , seqs_(topics.size())
   , lost_(topics.size(), 0)
 {
 }

@@ -53,7 +53,7 @@ TEST(BagWriter, TypedAndShiftedMessagesAreWrittenWithTheirTypes)
   for (int i = 0; i < 500; ++i)
   {
     geometry_msgs::PoseStamped p;
-    p.header.seq = i;
+    p.header.seq = 7777;  // the writer numbers the topic's messages itself
     p.header.frame_id = "world";
     p.pose.position.x = 0.001 * i;
     p.pose.orientation.w = 1.0;

@@ -8,7 +8,9 @@
  *   - received over TCP (topic_tools::ShapeShifter, the node): the message is queued as is;
  *   - typed, from a publisher in the same process (the nodelet): serialised at once into a buffer
  *     taken from a free list (no allocation once the list is warm), so that the publisher's pooled
- *     message is not held for the writer's batching period (its pool would then allocate).
+ *     message is not held for the writer's batching period (its pool would then allocate). roscpp
+ *     numbers header.seq only in what it serialises for TCP subscribers; here each typed topic's
+ *     messages are numbered 0, 1, ... at the push, so a message the writer drops leaves a gap.
  * The bag is written as <output>.active and renamed to <output> when closed. With split_mb /
  * split_duration the recording is a sequence <output without .bag>_<N>.bag, each closed when it
  * reaches that size [MB] or age [s]. Disk full: when the bag's filesystem has less than min_free_mb
@@ -22,6 +24,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -94,6 +97,11 @@ public:
     out.bytes.resize(ros::serialization::serializationLength(msg));
     ros::serialization::OStream stream(out.bytes.data(), static_cast<std::uint32_t>(out.bytes.size()));
     ros::serialization::serialize(stream, msg);
+    if (ros::message_traits::HasHeader<M>::value)  // header.seq first: number the topic's messages as
+    {                                              // roscpp does for a TCP subscriber (gaps = losses)
+      const std::uint32_t seq = seqs_[topic]++;
+      std::memcpy(out.bytes.data(), &seq, sizeof seq);  // little-endian, as ROS serialisation
+    }
     enqueue(std::move(out));
   }
 
@@ -139,6 +147,7 @@ private:
   unsigned part_ = 0;
   std::chrono::steady_clock::time_point opened_, last_free_check_;
   std::vector<std::atomic<std::uint64_t>> counts_;  ///< received per topic
+  std::vector<std::atomic<std::uint32_t>> seqs_;    ///< next header.seq per typed topic
   std::vector<std::uint64_t> lost_;                 ///< per topic, not written because of a disk fault (writer)
   std::thread writer_;
   std::atomic<bool> started_{ false }, stopping_{ false }, disk_fault_{ false };
