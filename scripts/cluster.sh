@@ -40,7 +40,7 @@ source "$here/cluster/run_lib.sh"
 OUT="$(realpath -m "$OUT")"; REPORT="$OUT/report"; RUNLOG="$OUT/run"
 mkdir -p "$REPORT" "$RUNLOG"
 make_run_keys "$OUT/keys" || exit 2   # throw-away link keys of this run (deleted at teardown)
-rm -f "$OUT"/cluster.bag "$OUT"/cluster.bag.active "$REPORT"/*.png "$RUNLOG"/*
+rm -f "$OUT"/cluster.bag "$OUT"/cluster.bag.active "$OUT"/cluster.*.bag "$OUT"/cluster.*.bag.active "$REPORT"/*.png "$RUNLOG"/*
 export SARAS_NETNS_RUN="${SARAS_NETNS_RUN:-/tmp/${SARAS_NETNS_PREFIX:-saras}_cluster}"
 NETNS=(bash "$here/cluster/netns.sh")
 BAG="$OUT/cluster.bag"
@@ -115,10 +115,12 @@ start_relays() {
   sleep 2
 }
 
-# record_run: recorder on the core PC for DURATION s; cuts the console link at CUT_LINK_AT
+# record_run: recorder on the core PC for DURATION s; cuts the console link at CUT_LINK_AT. One bag
+# with every stream (--no-in-process): the teleoperation's nodelet manager runs on the teleop PC, so
+# its streams cannot be recorded inside it by a recorder on the core PC.
 record_run() {
-  "${NETNS[@]}" exec core_pc rosrun saras_bringup recorder --config "$RECORDING" --output "$BAG" __name:=recorder \
-    >"$OUT/recorder.log" 2>&1 &
+  "${NETNS[@]}" exec core_pc rosrun saras_bringup recorder --config "$RECORDING" --output "$BAG" --no-in-process \
+    __name:=recorder >"$OUT/recorder.log" 2>&1 &
   local record_pid=$! t
   pids=("$record_pid" "${pids[@]}")
   wait_recording "$record_pid" "$BAG" || { echo "cluster: the recorder stopped; see $OUT/recorder.log"; return 2; }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Run the whole platform headless in simulation for DURATION seconds and write:
-#   OUT/platform.bag            the recording (rosbag of src/saras_bringup/config/recording.yaml)
+#   OUT/platform.bag            the recording (rosbag of src/saras_bringup/config/recording.yaml) and
+#   OUT/platform.teleop.bag     its in-process part (the streams recorded inside /teleop/teleop_manager)
 #   OUT/report/index.html       plots, augmented stereo frame, operator view page, rviz screenshot, topic table
 #   OUT/bag_check.txt           per-topic counts, rates, sequence/stamp gaps
 #   OUT/report/cpu.txt          CPU per process over the recording against its budget
@@ -14,6 +15,8 @@
 # ENDOSCOPE_SIZE (rendered stereo endoscope, WIDTHxHEIGHT): default 1280x720 on machines with at least
 # 4 cores; 640x360 on smaller ones, where rendering, overlay and JPEG of two 720p eyes at 30 fps take
 # about a core and starve the simulators (README, "Resource budget").
+# RECORD_IN_PROCESS=0: one bag, every stream over TCP (recorder --no-in-process); default: the
+# teleoperation's 1 kHz streams in OUT/platform.teleop.bag, recorded inside /teleop/teleop_manager.
 set -uo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 DURATION="${1:-30}"; OUT="${2:-$here/../out/demo}"; shift $(( $# >= 2 ? 2 : $# ))
@@ -24,7 +27,7 @@ source "$here/cluster/run_lib.sh"
 OUT="$(realpath -m "$OUT")"
 REPORT="$OUT/report"
 mkdir -p "$REPORT"
-rm -f "$OUT"/platform.bag "$OUT"/platform.bag.active "$REPORT"/*.png
+rm -f "$OUT"/platform.bag "$OUT"/platform.bag.active "$OUT"/platform.*.bag "$OUT"/platform.*.bag.active "$REPORT"/*.png
 export ROS_HOME="$OUT/ros_home"; export ROS_LOG_DIR="$ROS_HOME/log"; mkdir -p "$ROS_LOG_DIR"
 make_run_keys "$OUT/keys" || exit 2   # throw-away link keys of this run, deleted at exit
 port="$(free_port)"
@@ -62,8 +65,14 @@ if ! rosrun saras_bringup wait_ready --timeout "${READY_TIMEOUT:-180}"; then
   exit 2
 fi
 echo "demo: platform up, recording ${DURATION}s"
-rosrun saras_bringup recorder --config "$(rospack find saras_bringup)/config/recording.yaml" \
-  --output "$OUT/platform.bag" __name:=recorder >"$OUT/recorder.log" 2>&1 &
+recording="$(rospack find saras_bringup)/config/recording.yaml"
+# the bags of the recording: platform.bag and its in-process parts (recorder --print-bags)
+# RECORD_IN_PROCESS=0: every stream in platform.bag (recorder --no-in-process), for comparison
+in_process_flag=(); [[ "${RECORD_IN_PROCESS:-1}" == 0 ]] && in_process_flag=(--no-in-process)
+mapfile -t parts < <(rosrun saras_bringup recorder --config "$recording" --output "$OUT/platform.bag" \
+  "${in_process_flag[@]}" --print-bags | tail -n +2)
+rosrun saras_bringup recorder --config "$recording" --output "$OUT/platform.bag" "${in_process_flag[@]}" \
+  __name:=recorder >"$OUT/recorder.log" 2>&1 &
 record_pid=$!
 pids=("$record_pid" "${pids[@]}")
 if ! wait_recording "$record_pid" "$OUT/platform.bag"; then
@@ -84,7 +93,10 @@ done
 rosrun saras_bringup proc_cpu sample --root "$launch_pid" --root "$record_pid" --out "$OUT/cpu_end.json" \
   || echo "demo: CPU sample failed"
 echo "demo: stopping the recording"
-stop_pid "$record_pid" "the recorder" "$OUT/platform.bag.active"
+stop_pid "$record_pid" "the recorder" "$OUT/platform.bag.active" "${parts[@]/%/.active}"
+for part in "${parts[@]}"; do   # closed by the nodelet manager when it unloads the recorder's nodelet
+  wait_closed "$part.active" || echo "demo: $part is still open (reindexed after the platform stops)"
+done
 # after the recording (a browser costs a core for a few seconds): the operator view page as a browser shows it
 echo "demo: operator view page in headless Chromium"
 rosrun saras_operator_view page_screenshot "http://127.0.0.1:$view_port/" "$REPORT/operator_view.png" \
@@ -99,6 +111,10 @@ stop_pid "$launch_pid" roslaunch
 if ! close_bag "$OUT/platform.bag"; then
   echo "demo: no recording was written ($OUT/platform.bag missing)"; exit 2
 fi
+extra_bags=()
+for part in "${parts[@]}"; do
+  if close_bag "$part"; then extra_bags+=("$part"); else echo "demo: no in-process part $part (see $OUT/recorder.log)"; fi
+done
 # The demo's own measurements read the bag afterwards: nothing but the platform runs while it records.
 rosrun saras_visual_feedback visual_feedback_snapshot "$OUT/platform.bag" --output "$REPORT/augmented_stereo" \
   >"$OUT/snapshot.log" 2>&1 || echo "demo: no augmented stereo in the recording (see $OUT/snapshot.log)"
@@ -110,7 +126,7 @@ echo "demo: visual feedback: $colours"
 echo "demo: replaying the recording into rviz for the screenshot"
 replay_port="$(free_port)"
 ROS_MASTER_URI="http://127.0.0.1:$replay_port" roslaunch -p "$replay_port" saras_bringup replay.launch \
-  bag:="$OUT/platform.bag" >"$OUT/replay.log" 2>&1 &
+  bag:="$OUT/platform.bag" extra_bags:="${extra_bags[*]}" >"$OUT/replay.log" 2>&1 &
 replay_pid=$!
 pids=("$replay_pid" "${pids[@]}")
 sleep "${RVIZ_WAIT:-20}"
@@ -134,7 +150,7 @@ rosrun saras_bringup make_report "$OUT/platform.bag" "$REPORT" --check "$REPORT/
   --extra "Hand-eye calibration: robust solver vs OpenCV methods|hand_eye_bench.txt|src/saras_calibration/bench/run with TRIALS=${HANDEYE_TRIALS:-10} (README: 100 trials)" \
   --extra "Operator view (browser page, headless Chromium)|operator_view.png|http://127.0.0.1:<operator_view_port>/ served by saras_operator_view during the run, captured after the recording: augmented stereo, tool distances with their colours, tank energies, component health; $(tail -n 1 "$OUT/operator_view.log" 2>/dev/null)" \
   --extra "CPU per process over the recording|cpu.txt|percent of one core between the start and the end of the recording (/proc, saras_bringup proc_cpu), budgets of saras_bringup/config/cpu_budget.yaml (set for 1 kHz and 720p30; this run: $CONTROL_RATE Hz, ${endo_w}x${endo_h})" \
-  --extra "rviz (headless, Xvfb)|rviz.png|the recording replayed into rviz (roslaunch saras_bringup replay.launch bag:=...), Figure 4 scene" \
+  --extra "rviz (headless, Xvfb)|rviz.png|the recording replayed into rviz (roslaunch saras_bringup replay.launch bag:=... extra_bags:=...), Figure 4 scene" \
   --summary "make demo DURATION=$DURATION CONTROL_RATE=$CONTROL_RATE: simulated platform, $(date -u '+%Y-%m-%d %H:%M UTC')"
 echo "demo: report at $REPORT/index.html"
 exit "$check_rc"

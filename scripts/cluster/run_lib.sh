@@ -5,28 +5,50 @@ free_port() {
   python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
 }
 
-# stop_pid PID NAME [FILE]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and
-# SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILE, the
-# 20 s count restarts whenever FILE grows: the recorder, after SIGINT, writes what it has queued
-# (up to buffer_mb of recording.yaml), which on an overloaded host can take longer than 20 s; killing
-# it then would lose the queued end of the recording; a process still writing after 240 s is stopped.
-stop_pid() {
-  local last=-1 size t=0 total=0
-  kill -INT "$1" 2>/dev/null
-  while [ "$t" -lt 40 ] && [ "$total" -lt 480 ] && kill -0 "$1" 2>/dev/null; do
+# file_sizes FILE...: total size of those FILEs that exist [bytes]
+file_sizes() {
+  local f size=0
+  for f in "$@"; do size=$((size + $(stat -c %s "$f" 2>/dev/null || echo 0))); done
+  echo "$size"
+}
+
+# while_writing TEST [FILE ...]: sleep while the command TEST (eval) succeeds, up to 20 s, a count that
+# restarts whenever the FILEs' total size grows, and 240 s in all.
+while_writing() {
+  local test="$1" last=-1 size t=0 total=0
+  shift
+  while [ "$t" -lt 40 ] && [ "$total" -lt 480 ] && eval "$test"; do
     total=$((total + 1))
-    if [ -n "${3:-}" ]; then
-      size=$(stat -c %s "$3" 2>/dev/null || echo 0)
-      if [ "$size" -ne "$last" ]; then last=$size; t=0; fi
-    fi
+    size=$(file_sizes "$@")
+    if [ "$size" -ne "$last" ]; then last=$size; t=0; fi
     sleep 0.5; t=$((t + 1))
   done
-  if kill -0 "$1" 2>/dev/null; then
-    echo "$2 did not stop, terminating it and its children"
-    pkill -TERM -P "$1" 2>/dev/null; kill -TERM "$1" 2>/dev/null; sleep 2
-    pkill -KILL -P "$1" 2>/dev/null; kill -KILL "$1" 2>/dev/null
+}
+
+# stop_pid PID NAME [FILE ...]: SIGINT (roslaunch shuts its nodes down), up to 20 s, then SIGTERM and
+# SIGKILL to it and its children (a killed roslaunch would leave its nodes running). With FILEs, the
+# 20 s count restarts whenever they grow: the recorder, after SIGINT, writes what it has queued
+# (up to buffer_mb of recording.yaml, per bag), which on an overloaded host can take longer than 20 s;
+# killing it then would lose the queued end of the recording; a process still writing after 240 s is stopped.
+stop_pid() {
+  local pid="$1" name="$2"
+  shift 2
+  kill -INT "$pid" 2>/dev/null
+  while_writing "kill -0 $pid 2>/dev/null" "$@"
+  if kill -0 "$pid" 2>/dev/null; then
+    echo "$name did not stop, terminating it and its children"
+    pkill -TERM -P "$pid" 2>/dev/null; kill -TERM "$pid" 2>/dev/null; sleep 2
+    pkill -KILL -P "$pid" 2>/dev/null; kill -KILL "$pid" 2>/dev/null
   fi
-  wait "$1" 2>/dev/null
+  wait "$pid" 2>/dev/null
+}
+
+# wait_closed FILE: until FILE (a bag being written, .active) is gone, with stop_pid's limits (a part
+# bag written inside a nodelet manager is closed and renamed when the manager unloads the nodelet);
+# 1 if it is still there.
+wait_closed() {
+  while_writing "[ -e $(printf %q "$1") ]" "$1"
+  [ ! -e "$1" ]
 }
 
 # wait_recording PID BAG: until the recorder PID opened BAG.active (0) or stopped (1). The

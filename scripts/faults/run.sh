@@ -35,7 +35,9 @@ pid_of() { python3 "$F" pid "$1" 2>/dev/null; }
 rosmaster --core -p "$port" > "$OUT/master.log" 2>&1 & master=$!; pids+=("$master")
 for _ in $(seq 50); do rosparam list >/dev/null 2>&1 && break; sleep 0.2; done
 start_platform() {  # LOG: roslaunch the platform on this master, wait for the set-points
+  # one bag: manager_kill SIGKILLs the teleop manager, which would take the in-process part's index with it
   roslaunch -p "$port" "$SARAS_WS/launch/platform.launch" sim:=true rviz:=false record:=true operator_view:=false \
+    record_in_process:=false \
     bag:="$OUT/platform$1.bag" control_rate:="$rate" endoscope_width:=640 endoscope_height:=360 \
     > "$OUT/launch$1.log" 2>&1 & launch=$!; pids+=("$launch")
   if ! timeout 120 rostopic echo -n 1 /mesa_left/target_pose > /dev/null 2>&1; then

@@ -91,3 +91,12 @@ def test_replay_decodes_the_recorded_jpeg_for_rviz():
     assert decoders == {COMPRESSED[eye]: RAW[eye] for eye in EYES}
     assert {d['Image Topic'] for d in rviz_images()} >= set(decoders.values())
     assert any(n.type == 'rviz' for n in cfg.nodes) and any(n.type == 'play' for n in cfg.nodes)
+
+
+@pytest.mark.parametrize('extra, bags', [
+    ([], ['/tmp/x.bag']),
+    (['extra_bags:=/tmp/x.teleop.bag /tmp/x.more.bag'], ['/tmp/x.bag', '/tmp/x.teleop.bag', '/tmp/x.more.bag'])])
+def test_replay_plays_the_recording_and_its_extra_bags(extra, bags):
+    cfg = roslaunch_config.load_config_default([(REPLAY, ['bag:=/tmp/x.bag'] + extra)], None, verbose=False)
+    play = [n for n in cfg.nodes if (n.package, n.type) == ('rosbag', 'play')]
+    assert len(play) == 1 and play[0].args.split()[-len(bags) - 1:] == ['1.0'] + bags

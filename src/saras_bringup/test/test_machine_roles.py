@@ -70,8 +70,9 @@ def test_platform_starts_the_simulated_platform(platform):
 
 
 def test_cluster_on_loopback_equals_platform(platform):
-    """Same nodes, same parameters when every machine address is the loopback address."""
-    on_one_host = load(os.path.join(LAUNCH, 'cluster.launch'), rviz='true',
+    """Same nodes, same parameters when every machine address is the loopback address (and the
+    teleoperation's streams recorded in-process, as on one host)."""
+    on_one_host = load(os.path.join(LAUNCH, 'cluster.launch'), rviz='true', record_in_process='true',
                        bag=os.path.join(WS, 'out', 'platform.bag'), **LOOPBACK)
     assert nodes(on_one_host) == nodes(platform)
     assert params(on_one_host) == params(platform)

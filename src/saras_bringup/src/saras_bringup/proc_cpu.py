@@ -6,10 +6,18 @@ one core. Processes are named as ROS names them: ``__name:=`` of the command lin
 its ``ROS_NAMESPACE``; a helper process without a name (e.g. the ``rosbag record`` child of the
 recorder) counts for its nearest named ancestor; roslaunch and the master by their programs.
 ``budget_rows`` classifies the processes (simulators vs product) and checks each against the budgets of
-``config/cpu_budget.yaml``. A product process that hosts a simulator's threads (the simulated endoscope
-renders inside the visual-feedback nodelet manager, zero-copy like the real capture nodelet) is split:
-its threads whose name starts with the configured prefix (``simulator_threads``) form a row of their
-own, ``<process> [<prefix>* threads]``, counted as a simulator. Reading /proc costs a few milliseconds per sample: nothing runs in between.
+``config/cpu_budget.yaml``. Threads of a nodelet manager can belong to another row (``thread_rows``:
+{process: {thread-name prefix: row}}, thread name = ``/proc/PID/task/TID/comm``); their CPU is moved
+from the host process's row to that row:
+
+* ``simulator_threads`` ({process: prefix}): a simulator's threads in a product process (the simulated
+  endoscope renders inside the visual-feedback nodelet manager, zero-copy like the real capture
+  nodelet) form a row of their own, ``<process> [<prefix>* threads]``, counted as a simulator;
+* ``attributed_threads`` ({process: {prefix: row}}): threads doing another process's work (the
+  recorder's in-process bag writer ``stream_bag`` in the teleoperation manager) count for that row,
+  shown as ``<row> (+ <prefix> in <process>)`` and checked against ``<row>``'s budget.
+
+Reading /proc costs a few milliseconds per sample: nothing runs in between.
 """
 import os
 import time
@@ -41,7 +49,8 @@ def thread_row(name, prefix):
 
 def sample(roots, split=None):
     """CPU ticks of every process in the trees under ``roots`` (pids): {'wall': s, 'procs': [...]}.
-    ``split``: {process name: thread-name prefix} of threads counted apart (:func:`thread_row`)."""
+    ``split``: {process name: {thread-name prefix: row}} (``thread_rows`` of :func:`parse_budget`):
+    the ticks of those threads are an entry of that row, taken off the process's own."""
     split = split or {}
     stats = {}
     for pid in procfs.pids():
@@ -56,11 +65,13 @@ def sample(roots, split=None):
         pid, parent_label = stack.pop()
         label = _own_name(pid) or parent_label or procfs.comm(pid)
         _, ticks, start = stats[pid]
-        prefix = split.get(label)
-        if prefix is not None:
-            apart = sum(t for n, t in procfs.threads(pid).items() if n.startswith(prefix))
-            ticks -= apart
-            procs.append({'pid': pid, 'start': start, 'name': thread_row(label, prefix), 'ticks': apart})
+        threads = procfs.threads(pid) if label in split else {}
+        apart = {}
+        for prefix, row in split.get(label, {}).items():
+            apart[row] = apart.get(row, 0) + sum(t for n, t in threads.items() if n.startswith(prefix))
+        for row, row_ticks in sorted(apart.items()):
+            ticks -= row_ticks
+            procs.append({'pid': pid, 'start': start, 'name': row, 'ticks': row_ticks})
         procs.append({'pid': pid, 'start': start, 'name': label, 'ticks': ticks})
         inherited = None if label == 'roslaunch' else label   # roslaunch's children are the nodes
         stack.extend((c, inherited) for c in children.get(pid, ()))
@@ -81,9 +92,30 @@ def shares(before, after):
     return out
 
 
+def _ros_name(value):
+    return isinstance(value, str) and value.startswith('/')
+
+
+def _attributed(data):
+    """``attributed_threads`` {process: {prefix: row}} validated, and the display names of their rows."""
+    attributed = data.get('attributed_threads', {})
+    if not isinstance(attributed, dict) or not all(
+            _ros_name(k) and isinstance(v, dict) and v and all(isinstance(p, str) and p and _ros_name(r)
+                                                               for p, r in v.items())
+            for k, v in attributed.items()):
+        raise BudgetError('attributed_threads: ROS name -> {non-empty thread-name prefix: ROS name of its row}')
+    shown = {}
+    for process, prefixes in sorted(attributed.items()):
+        for prefix, row in sorted(prefixes.items()):
+            shown.setdefault(row, []).append('%s in %s' % (prefix, process))
+    return attributed, {row: '%s (+ %s)' % (row, ', '.join(parts)) for row, parts in shown.items()}
+
+
 def parse_budget(data):
     """Validate a budget file's content: {'simulators': [names], 'budgets': {name: %}, 'product_total': %,
-    'simulator_threads': {process name: thread-name prefix}}."""
+    'simulator_threads': {process name: thread-name prefix},
+    'attributed_threads': {process name: {thread-name prefix: row}}}; adds 'thread_rows' (both as
+    {process: {prefix: row}}, for :func:`sample`) and 'shown' ({row: its name in the table})."""
     if not isinstance(data, dict):
         raise BudgetError('the budget file must be a mapping')
     sims = data.get('simulators', [])
@@ -91,8 +123,9 @@ def parse_budget(data):
     total = data.get('product_total')
     threads = data.get('simulator_threads', {})
     if not isinstance(threads, dict) or not all(
-            isinstance(k, str) and k.startswith('/') and isinstance(v, str) and v for k, v in threads.items()):
+            _ros_name(k) and isinstance(v, str) and v for k, v in threads.items()):
         raise BudgetError('simulator_threads: ROS name -> non-empty thread-name prefix')
+    attributed, shown = _attributed(data)
     if not isinstance(sims, list) or not all(isinstance(s, str) and s.startswith('/') for s in sims):
         raise BudgetError('simulators: a list of ROS names (/ns/name)')
     if not isinstance(budgets, dict) or not all(
@@ -101,17 +134,22 @@ def parse_budget(data):
     if not isinstance(total, (int, float)) or not 0 < total <= 200:
         raise BudgetError('product_total: percent of one core in (0, 200]')
     sims = list(sims) + [thread_row(k, v) for k, v in threads.items()]
+    rows = {k: {v: thread_row(k, v)} for k, v in threads.items()}
+    for process, prefixes in attributed.items():
+        rows.setdefault(process, {}).update(prefixes)
     return {'simulators': sims, 'budgets': dict(budgets), 'product_total': float(total),
-            'simulator_threads': dict(threads)}
+            'simulator_threads': dict(threads), 'attributed_threads': attributed, 'thread_rows': rows,
+            'shown': shown}
 
 
 def budget_rows(cpu, budget):
-    """Rows (name, kind, percent, budget or None, ok) sorted by kind then cost, and the product total row."""
+    """Rows (name, kind, percent, budget or None, ok) sorted by kind then cost, and the product total row.
+    A row with attributed threads is named as in ``budget['shown']``, its budget is its process's."""
     rows = []
     for name, pct in cpu.items():
         kind = 'simulator' if name in budget['simulators'] else 'product'
         limit = budget['budgets'].get(name)
-        rows.append((name, kind, pct, limit, limit is None or pct <= limit))
+        rows.append((budget.get('shown', {}).get(name, name), kind, pct, limit, limit is None or pct <= limit))
     rows.sort(key=lambda r: (r[1] != 'product', -r[2]))
     product = sum(r[2] for r in rows if r[1] == 'product')
     total = ('product processes together', 'product', product, budget['product_total'],
@@ -121,8 +159,9 @@ def budget_rows(cpu, budget):
 
 def table_text(rows, total):
     """Plain-text table of :func:`budget_rows` (the demo prints it and the report shows it)."""
-    lines = ['%-40s %-9s %8s %8s  %s' % ('process', 'kind', 'CPU [%]', 'budget', 'verdict')]
+    width = max([40] + [len(r[0]) for r in rows])
+    lines = ['%-*s %-9s %8s %8s  %s' % (width, 'process', 'kind', 'CPU [%]', 'budget', 'verdict')]
     for name, kind, pct, limit, ok in list(rows) + [total]:
-        lines.append('%-40s %-9s %8.1f %8s  %s' % (name, kind, pct, '-' if limit is None else '%.0f' % limit,
-                                                 '' if limit is None else ('ok' if ok else 'OVER')))
+        lines.append('%-*s %-9s %8.1f %8s  %s' % (width, name, kind, pct, '-' if limit is None else '%.0f' % limit,
+                                                '' if limit is None else ('ok' if ok else 'OVER')))
     return '\n'.join(lines)

@@ -1,13 +1,22 @@
 """The recording list of the ROS core & data-recording node and the check of a recorded bag.
 
 ``load_recording_config`` validates ``config/recording.yaml``; ``recorder_command`` turns it into the
-``rosbag record`` command line (bounded buffer, explicit topic list); ``check_bag`` measures every
-stream in a bag: message count, rate, sequence gaps (``header.seq`` jumps of a single publisher) and
-stamp gaps (intervals longer than ``gap_factor / rate``). rosbag's own "dropped" warnings are
-throttled and undercount, so the bag itself is the evidence.
+``bag_recorder`` command line (bounded buffer, explicit topic list) and ``stream_recorder_command``
+into the loader of the ``saras_bringup/StreamRecorder`` nodelet, which records the streams flagged
+``in_process`` inside their publishers' nodelet manager (zero-copy) into the part bag
+``part_path(main bag, part)``. A recording is the main bag and its parts (``recording_bags``).
+``check_bag`` measures every stream of a recording: message count, rate, sequence gaps
+(``header.seq`` jumps of a single publisher) and stamp gaps (intervals longer than
+``gap_factor / rate``). rosbag's own "dropped" warnings are throttled and undercount, so the bag
+itself is the evidence.
 
-Only ``check_bag`` needs the ``rosbag`` Python module; it is imported lazily.
+Only ``open_bags`` and ``check_bag`` need the ``rosbag`` Python module; it is imported lazily.
 """
+import contextlib
+import glob
+import heapq
+import os
+import re
 import struct
 
 import yaml
@@ -18,16 +27,16 @@ class RecordingConfigError(ValueError):
 
 
 class Stream(object):
-    __slots__ = ('topic', 'rate', 'group', 'required', 'header')
+    __slots__ = ('topic', 'rate', 'group', 'required', 'header', 'in_process')
 
-    def __init__(self, topic, rate, group, required, header):
+    def __init__(self, topic, rate, group, required, header, in_process=False):
         self.topic, self.rate, self.group = topic, rate, group
-        self.required, self.header = required, header
+        self.required, self.header, self.in_process = required, header, in_process
 
 
 class RecordingConfig(object):
     def __init__(self, streams, min_rate_fraction, gap_factor, buffer_mb, chunk_kb, queue=2000,
-                 tcp_nodelay=False):
+                 tcp_nodelay=False, in_process_manager=None, in_process_part=None):
         self.streams = streams
         self.tcp_nodelay = tcp_nodelay
         self.queue = queue
@@ -35,10 +44,22 @@ class RecordingConfig(object):
         self.gap_factor = gap_factor
         self.buffer_mb = buffer_mb
         self.chunk_kb = chunk_kb
+        self.in_process_manager = in_process_manager   # nodelet manager publishing the in_process streams
+        self.in_process_part = in_process_part         # their bag: part_path(main bag, in_process_part)
 
     @property
     def topics(self):
         return [s.topic for s in self.streams]
+
+    @property
+    def main_topics(self):
+        """Topics of the main bag (bag_recorder) when the in-process streams are recorded apart."""
+        return [s.topic for s in self.streams if not s.in_process]
+
+    @property
+    def in_process_topics(self):
+        """Topics recorded inside ``in_process_manager`` (StreamRecorder nodelet)."""
+        return [s.topic for s in self.streams if s.in_process]
 
 
 def _number(data, key, default, low, high):
@@ -48,10 +69,42 @@ def _number(data, key, default, low, high):
     return value
 
 
+_ROS_NAME = re.compile(r'^(/[A-Za-z][A-Za-z0-9_]*)+$')
+_PART = re.compile(r'^[A-Za-z0-9_]+$')
+
+
+def _in_process_section(data):
+    """(manager, part) of the optional ``in_process`` section, or (None, None)."""
+    section = data.get('in_process')
+    if section is None:
+        return None, None
+    if not isinstance(section, dict):
+        raise RecordingConfigError('"in_process" must be a mapping with "manager" and "part", got %r' % (section,))
+    manager, part = section.get('manager'), section.get('part')
+    if not isinstance(manager, str) or not _ROS_NAME.match(manager):
+        raise RecordingConfigError('in_process: "manager" must be an absolute node name, got %r' % (manager,))
+    if not isinstance(part, str) or not _PART.match(part):
+        raise RecordingConfigError('in_process: "part" must be a non-empty name of [A-Za-z0-9_], got %r'
+                                   % (part,))
+    return manager, part
+
+
+def _stream_in_process(entry, i, topic, manager):
+    value = entry.get('in_process', False)
+    if not isinstance(value, bool):
+        raise RecordingConfigError('streams[%d] (%s): "in_process" must be true or false, got %r'
+                                   % (i, topic, value))
+    if value and manager is None:
+        raise RecordingConfigError('streams[%d] (%s): "in_process: true" needs the top-level "in_process" '
+                                   'section (manager, part)' % (i, topic))
+    return value
+
+
 def parse_recording_config(data, control_rate=1000.0):
     """Validate a loaded recording.yaml; ``rate: control`` streams get ``control_rate`` [Hz]."""
     if not isinstance(data, dict) or not isinstance(data.get('streams'), list) or not data['streams']:
         raise RecordingConfigError('expected a mapping with a non-empty "streams" list')
+    manager, part = _in_process_section(data)
     streams, seen = [], set()
     for i, entry in enumerate(data['streams']):
         if not isinstance(entry, dict):
@@ -69,14 +122,15 @@ def parse_recording_config(data, control_rate=1000.0):
             raise RecordingConfigError('streams[%d] (%s): "rate" must be a number in [0, 1e5] Hz, got %r'
                                        % (i, topic, rate))
         streams.append(Stream(topic, float(rate), str(entry.get('group', 'other')),
-                              bool(entry.get('required', True)), bool(entry.get('header', True))))
+                              bool(entry.get('required', True)), bool(entry.get('header', True)),
+                              _stream_in_process(entry, i, topic, manager)))
     return RecordingConfig(streams,
                            float(_number(data, 'min_rate_fraction', 0.8, 0.0, 1.0)),
                            float(_number(data, 'gap_factor', 3.0, 1.0, 100.0)),
                            int(_number(data, 'buffer_mb', 1024, 16, 65536)),
                            int(_number(data, 'chunk_kb', 4096, 64, 1048576)),
                            int(_number(data, 'subscriber_queue', 2000, 100, 1000000)),
-                           _flag(data, 'tcp_nodelay', False))
+                           _flag(data, 'tcp_nodelay', False), manager, part)
 
 
 def _flag(data, key, default):
@@ -98,14 +152,80 @@ def load_recording_config(path, control_rate=1000.0):
         raise RecordingConfigError('%s: %s' % (path, exc))
 
 
-def recorder_command(config, output, extra_topics=()):
+def recorder_command(config, output, extra_topics=(), in_process=True):
     """argv of saras_bringup's ``bag_recorder`` (rosbag record with a ``subscriber_queue`` deep
-    per-topic queue; rosbag record's fixed 100 lost bursts) for the configured streams, writing
-    ``output`` (a .bag path)."""
+    per-topic queue; rosbag record's fixed 100 lost bursts) writing ``output`` (a .bag path): the
+    main topics when ``in_process`` (the in-process streams go to the part bag of
+    :func:`stream_recorder_command`), every configured topic otherwise."""
+    topics = config.main_topics if in_process else config.topics
     return (['rosrun', 'saras_bringup', 'bag_recorder', '-O', output,
              '--buffsize', str(config.buffer_mb), '--chunksize', str(config.chunk_kb),
              '--queue', str(config.queue)] + (['--tcpnodelay'] if config.tcp_nodelay else [])
-            + config.topics + list(extra_topics))
+            + topics + list(extra_topics))
+
+
+def part_path(output, part):
+    """The part bag ``part`` of the recording whose main bag is ``output``:
+    ``/x/platform.bag`` -> ``/x/platform.<part>.bag``."""
+    stem = output[:-len('.bag')] if output.endswith('.bag') else output
+    return '%s.%s.bag' % (stem, part)
+
+
+def stream_recorder_command(config, output, node_name):
+    """argv loading the ``saras_bringup/StreamRecorder`` nodelet into ``in_process_manager``: it
+    records the in-process topics into ``part_path(output, in_process_part)`` (``output``: the main
+    bag). The loader is node ``<node_name>_<part>``; SIGINT to it unloads the nodelet, which closes
+    the part bag."""
+    if not config.in_process_manager or not config.in_process_topics:
+        raise RecordingConfigError('no in_process streams configured')
+    part = config.in_process_part
+    return ['rosrun', 'nodelet', 'nodelet', 'load', 'saras_bringup/StreamRecorder', config.in_process_manager,
+            '__name:=%s_%s' % (node_name.rstrip('/').rsplit('/', 1)[-1], part),
+            '_output:=' + os.path.abspath(part_path(output, part)),
+            '_topics:=' + ','.join(config.in_process_topics),
+            '_buffer_mb:=%d' % config.buffer_mb, '_chunk_kb:=%d' % config.chunk_kb]
+
+
+def recording_bags(output, config=None):
+    """The bags of the recording whose main bag is ``output``: ``[output]`` and its part bags that
+    exist. With ``config``, its ``in_process_part``; without, every closed ``<stem>.*.bag`` sibling
+    (sorted; a part still open is ``.bag.active`` and not read)."""
+    if config is not None:
+        parts = [part_path(output, config.in_process_part)] if config.in_process_part else []
+    else:
+        stem = output[:-len('.bag')] if output.endswith('.bag') else output
+        parts = sorted(glob.glob(glob.escape(stem) + '.*.bag'))
+    return [output] + [p for p in parts if os.path.isfile(p) and p != output]
+
+
+def _as_list(bag_paths):
+    return [bag_paths] if isinstance(bag_paths, str) else list(bag_paths)
+
+
+@contextlib.contextmanager
+def open_bags(bag_paths):
+    """``rosbag.Bag`` of each path (one path or a list), closed together."""
+    import rosbag  # noqa: delayed so that the pure functions work without ROS
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(rosbag.Bag(p)) for p in _as_list(bag_paths)]
+
+
+def read_merged(bags, **kwargs):
+    """``read_messages(**kwargs)`` of several open bags as one stream in receive-time order (a topic
+    recorded in two bags comes out merged)."""
+    streams = [bag.read_messages(**kwargs) for bag in bags]
+    return streams[0] if len(streams) == 1 else heapq.merge(*streams, key=lambda m: m[2])
+
+
+def start_time(bags):
+    """Receive time of the first message of several open bags [s]; None when they are all empty."""
+    times = []
+    for bag in bags:
+        try:
+            times.append(bag.get_start_time())
+        except Exception:  # rosbag.ROSBagException: an empty bag (e.g. a part whose streams never came)
+            pass
+    return min(times) if times else None
 
 
 _HEADER = struct.Struct('<III')  # std_msgs/Header starts with uint32 seq, time stamp (secs, nsecs)
@@ -158,27 +278,29 @@ class StreamStats(object):
             self.stamp_gaps = sum(1 for dt in intervals if dt > limit)
 
 
-def check_bag(bag_path, config, topics=None, skews=None):
-    """Measure every configured stream in ``bag_path``.
+def check_bag(bag_paths, config, topics=None, skews=None):
+    """Measure every configured stream in a recording: one bag path or a list (the main bag and its
+    parts, :func:`recording_bags`). A topic recorded in several bags is measured over all its
+    messages in receive-time order.
 
     Returns (results, problems): ``results`` is a list of dicts (one per configured stream plus any
     other recorded topic) and ``problems`` a list of human-readable failures for required streams
     (missing, too slow, or with lost messages). With a dict ``skews``, it is filled with one
     ``stamp_skew.SkewSamples`` per topic with header stamps (receive - stamp, publishers).
     """
-    import rosbag  # noqa: delayed so that the pure functions above work without ROS
     from saras_bringup.stamp_skew import SkewSamples
 
     wanted = {s.topic: s for s in config.streams}
     stats, intervals, last_t = {}, {}, {}
     skews = {} if skews is None else skews
-    with rosbag.Bag(bag_path) as bag:
-        info = bag.get_type_and_topic_info().topics
-        for topic, tinfo in info.items():
-            stats[topic] = StreamStats(topic)
-            stats[topic].msg_type = tinfo.msg_type
-            intervals[topic] = []
-        for topic, raw, t, conn in bag.read_messages(topics=topics, raw=True, return_connection_header=True):
+    with open_bags(bag_paths) as bags:
+        for bag in bags:
+            for topic, tinfo in bag.get_type_and_topic_info().topics.items():
+                if topic not in stats:
+                    stats[topic] = StreamStats(topic)
+                    stats[topic].msg_type = tinfo.msg_type
+                    intervals[topic] = []
+        for topic, raw, t, conn in read_merged(bags, topics=topics, raw=True, return_connection_header=True):
             stream = wanted.get(topic)
             data = raw[1]
             header = None
@@ -186,7 +308,6 @@ def check_bag(bag_path, config, topics=None, skews=None):
                 if len(data) >= _HEADER.size and _has_header(raw[0]):
                     seq, secs, nsecs = _HEADER.unpack_from(data, 0)
                     header = (seq, secs + 1e-9 * nsecs)
-            st = stats[topic]
             tr = t.to_sec()
             ts = header[1] if header is not None and header[1] > 0 else tr
             if header is not None and header[1] > 0:
@@ -197,12 +318,17 @@ def check_bag(bag_path, config, topics=None, skews=None):
             if topic in last_t:
                 intervals[topic].append(ts - last_t[topic])
             last_t[topic] = ts
-            st.add(tr, header)
-    results, problems = [], []
+            stats[topic].add(tr, header)
     for topic, st in stats.items():
         stream = wanted.get(topic)
-        rate = stream.rate if stream else 0.0
-        st.finish(rate, config.gap_factor, intervals[topic])
+        st.finish(stream.rate if stream else 0.0, config.gap_factor, intervals[topic])
+    return _results(stats, config)
+
+
+def _results(stats, config):
+    """(results, problems) of :func:`check_bag` from the per-topic :class:`StreamStats`."""
+    wanted = {s.topic: s for s in config.streams}
+    results, problems = [], []
     for stream in config.streams:
         st = stats.get(stream.topic)
         row = {'topic': stream.topic, 'group': stream.group, 'nominal_rate': stream.rate,

@@ -1,6 +1,7 @@
 """Demo report: plots and an index.html from a platform recording.
 
-``build_report(bag_path, out_dir, check_results, extras)`` writes PNG plots and ``index.html``:
+``build_report(bag_path, out_dir, check_results, extras)`` reads the recording (the main bag
+``bag_path`` and its part bags, ``recording.recording_bags``) and writes PNG plots and ``index.html``:
 master vs slave trajectory per channel, the instrument jaw following the Simball clip, tool
 distances with the thresholds, tank energies, contact forces, estimated vs true contact depths, one
 recorded endoscope frame with the contact estimate drawn (saras_bringup.contact_frame), the augmented
@@ -19,15 +20,17 @@ matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 
 from saras_bringup.contact_frame import PATCH_RADIUS, write_contact_frame  # noqa: E402
+from saras_bringup.recording import open_bags, read_merged, recording_bags, start_time  # noqa: E402
 
 SIDES = ('left', 'right')
 TOOLS = ('mesa_left', 'mesa_right', 'PSM1', 'PSM2')
 
 
-def read_series(bag, topics):
-    """{topic: list of (t_bag [s], msg)} for the given topics (deserialized)."""
+def read_series(bags, topics):
+    """{topic: list of (t_bag [s], msg)} for the given topics (deserialized) from one open bag or a
+    list (a recording's bags: receive-time order across them)."""
     out = {t: [] for t in topics}
-    for topic, msg, t in bag.read_messages(topics=list(topics)):
+    for topic, msg, t in read_merged(bags if isinstance(bags, (list, tuple)) else [bags], topics=list(topics)):
         out[topic].append((t.to_sec(), msg))
     return out
 
@@ -442,7 +445,6 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     .txt files (e.g. a benchmark table) as preformatted text; sections: (title, HTML) blocks shown
     first (e.g. one per machine of a cluster run).
     """
-    import rosbag
     os.makedirs(out_dir, exist_ok=True)
     params = params or {}
     thresholds = thresholds or {
@@ -463,9 +465,10 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
     topics += list(PEDAL_TOPICS.values())
     topics += ['/mesa_%s/jaw_target' % s for s in SIDES] + ['/mesa_%s/joint_states' % s for s in SIDES]
     topics += ['/touchball/%s/state' % s for s in SIDES]
-    with rosbag.Bag(bag_path) as bag:
-        t0 = bag.get_start_time()
-        data = read_series(bag, topics)
+    paths = recording_bags(bag_path)
+    with open_bags(paths) as bags:
+        t0 = start_time(bags) or 0.0
+        data = read_series(bags, topics)
     rep = Report(out_dir, t0)
     for side in SIDES:
         rep.figure('trajectory_%s.png' % side, 'Master vs slave trajectory, %s channel' % side,
@@ -499,7 +502,7 @@ def build_report(bag_path, out_dir, check, params=None, extras=None, thresholds=
             rep.sections.append((title, '<p class="missing">not captured: %s</p>' % html.escape(caption)))
     problems = check.get('problems', []) if check else []
     body = ['<h1>SARAS MULTIROBOTS-SURGERY platform: demo report</h1>',
-            '<p>Recording: <code>%s</code></p>' % html.escape(os.path.abspath(bag_path)),
+            '<p>Recording: %s</p>' % ' + '.join('<code>%s</code>' % html.escape(os.path.abspath(p)) for p in paths),
             '<p>%s</p>' % html.escape(summary)]
     if problems:
         body.append('<h2>Problems</h2><ul>%s</ul>' % ''.join(
