@@ -40,6 +40,7 @@
  * rejection reason (keys: describeHealth() in touchball_receiver_core.h); rejection log lines at most
  * one per second per reason, with the count of the ones not logged.
  * touch_<side>/joint_states (sensor_msgs/JointState, rviz) at ~joint_states_rate.
+ * The wrench_cmd callbacks run in the publisher's thread (saras_common::InlineCallbackQueue).
  * Header stamps are the receive time (ros::Time::now()). Parameters: config/touchball.yaml (units
  * there), read once by readReceiverConfig (saras_common::Params); an invalid value is a fatal
  * start-up error naming the parameter (`nodelet standalone` / `nodelet load` exit non-zero).
@@ -74,6 +75,7 @@
 #include <sensor_msgs/Joy.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "saras_common/inline_callback_queue.h"
 #include "saras_common/nodelet_namespace.h"
 #include "saras_drivers/touchball_kinematics.h"
 #include "saras_drivers/touchball_receiver_core.h"
@@ -199,9 +201,14 @@ private:
         s.js.position.assign(6, 0.0);
       }
       const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
-      s.sub_wrench = nh.subscribe<geometry_msgs::WrenchStamped>(
-          tns + "wrench_cmd", 10, [this, i](const geometry_msgs::WrenchStamped::ConstPtr& m) { onWrench(i, *m); },
-          ros::VoidConstPtr(), fast);
+      // onWrench only latches the command (ReceiverCore, locked): it runs at once in the publisher's
+      // thread (the teleoperation's, in the same manager), not on a worker thread woken per message
+      ros::SubscribeOptions ops;
+      ops.init<geometry_msgs::WrenchStamped>(
+          tns + "wrench_cmd", 10, [this, i](const geometry_msgs::WrenchStamped::ConstPtr& m) { onWrench(i, *m); });
+      ops.transport_hints = fast;
+      ops.callback_queue = &wrench_queue_;
+      s.sub_wrench = nh.subscribe(ops);
     }
     tf_.reset(new saras_common::MessagePool<tf2_msgs::TFMessage>(kPoolSize, tf));
     if (cfg_.publish_tf)
@@ -509,6 +516,7 @@ private:
   char source_[64] = {};  ///< accepted console "<ip>:<port>" ("*" = any) for the status texts
   std::mutex status_mutex_;
   std::array<std::string, kDevices> frames_;
+  saras_common::InlineCallbackQueue wrench_queue_;  ///< wrench_cmd callbacks (declared before sides_: outlives them)
   std::array<Side, kDevices> sides_;
   std::unique_ptr<saras_common::MessagePool<tf2_msgs::TFMessage>> tf_;
   ros::Publisher pub_tf_, pub_tf_all_, pub_status_;

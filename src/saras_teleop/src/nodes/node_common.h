@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <initializer_list>
 #include <memory>
@@ -118,6 +119,74 @@ private:
 
   diagnostic_updater::Updater updater_;
   ros::SteadyTimer timer_;
+};
+
+/**
+ * The ~rate timer of an event-driven node: its outputs follow its inputs, and the timer only fills
+ * in (republishes, steps, supervises) when an input stream stops. tick(now) does the node's timer
+ * work and returns true when it found a gap (an input older than 1.5 periods, or the node not
+ * started yet). While the inputs arrive densely (kDenseTicks ticks without two gaps in a row) the
+ * timer runs at the slower watchdog period instead of ~rate; a watchdog tick that finds a gap does
+ * that tick's fill-in, and the second consecutive one returns the timer to ~rate (a single late input
+ * on a loaded host does not). A stopped stream is thus filled in at ~rate after at most two watchdog
+ * periods, and every timeout (all >= 50 ms) is then checked at ~rate as before; in steady operation
+ * the node costs no timer callback per control period (roscpp's timer thread wakes up after each).
+ * A watchdog period <= the period keeps the timer at ~rate (no pacing). Runs on the node's queue.
+ */
+class PacedTimer
+{
+public:
+  using Tick = std::function<bool(const ros::Time& now)>;
+  static constexpr int kDenseTicks = 20;  ///< ticks without a gap before the watchdog period
+
+  /// @param period [s] the node's control period (1/~rate); @param watchdog_period [s] (1/~watchdog_rate)
+  PacedTimer(ros::NodeHandle& nh, double period, double watchdog_period, const Tick& tick)
+    : period_(period), watchdog_(watchdog_period), tick_(tick)
+  {
+    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &PacedTimer::onTimer, this);
+  }
+  /// true while the inputs are dense and the timer runs at the watchdog period
+  bool paced() const { return paced_; }
+  /// /diagnostics text: the timer's current rate and why
+  std::string describe() const
+  {
+    char text[96];
+    std::snprintf(text, sizeof text, paced_ ? "%.0f Hz watchdog (inputs dense)" : "%.0f Hz", 1.0 / (paced_ ? watchdog_ : period_));
+    return text;
+  }
+
+private:
+  void onTimer(const ros::SteadyTimerEvent&)
+  {
+    if (tick_(ros::Time::now()))
+    {
+      // a gap at a single tick is an input late on a loaded host (the tick filled it in); a gap at
+      // two consecutive ticks is a stopped stream: back to ~rate, dense again after kDenseTicks
+      if (++gaps_ >= 2)
+      {
+        dense_ = 0;
+        if (paced_)
+        {
+          paced_ = false;
+          timer_.setPeriod(ros::WallDuration(period_));
+        }
+      }
+      return;
+    }
+    gaps_ = 0;
+    if (!paced_ && watchdog_ > period_ && ++dense_ >= kDenseTicks)
+    {
+      paced_ = true;
+      timer_.setPeriod(ros::WallDuration(watchdog_));
+    }
+  }
+
+  double period_, watchdog_;
+  Tick tick_;
+  ros::SteadyTimer timer_;
+  int dense_ = 0;
+  int gaps_ = 0;  ///< consecutive paced ticks that found a gap
+  bool paced_ = false;
 };
 
 /// Messages per second between two diagnostics updates: count() on the control path, rate() in the update.

@@ -17,7 +17,8 @@
  * channel's trigger flows (after every channel stepped once, or when a channel steps again before the
  * others), so that it follows the device samples as the outputs do and needs no timer tick (a late
  * tick on a loaded host would thin it out); from the timer, once per tick, while a trigger is
- * missing (older than 10 periods).
+ * missing (older than 10 periods). While every channel's trigger flows the timer runs at
+ * ~watchdog_rate (PacedTimer, node_common.h).
  * Energy exchange: a pout message carries the energy sent since the previous one divided by the
  * exchange period 1/rate [W]; the receiver credits msg * (1/rate) [J] once per message, so a lost or
  * delayed packet can only lose energy, never duplicate it (a latched power would).
@@ -133,6 +134,7 @@ public:
     p.bypass = prm.flag("bypass", false);
     const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
+    const double watchdog = prm.number("watchdog_rate", 100.0, "Hz", { positive() });
     input_timeout_ = prm.number("input_timeout", 0.1, "s", { positive() });
     force_sign_ = prm.number("contact_force_sign", -1.0, "", { saras_common::inRange(-1.0, 1.0) });
     require_measurement_ = prm.flag("require_measurement", Traits::kRequireMeasurement);
@@ -183,7 +185,7 @@ public:
     energy_pub_ = nh.advertise<std_msgs::Float64>("energy", kStreamQueue);
     last_step_ = ros::Time::now();
     cycle_.assign(channels.size(), false);
-    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TankNode::onTimer, this);
+    timer_.reset(new PacedTimer(nh, period_, 1.0 / watchdog, [this](const ros::Time& now) { return onTimer(now); }));
     health_.reset(new Health(nh, pnh, name, "energy tank",
                              [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
     ROS_INFO("%s: %zu channel(s), T_init %.2f J, rate %.0f Hz", Traits::kName, channels.size(), p.T_init, rate);
@@ -394,9 +396,13 @@ private:
     return true;
   }
 
-  void onTimer(const ros::SteadyTimerEvent&)
+  /// PacedTimer tick: true if a channel's trigger is older than 1.5 periods (the timer then runs at
+  /// ~rate: it steps the tank when no trigger came and carries the exchange while one is missing)
+  bool onTimer(const ros::Time& now)
   {
-    const ros::Time now = ros::Time::now();
+    bool gap = false;
+    for (const Port& pt : ports_)
+      gap = gap || pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > 1.5 * period_;
     if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
     {
       step(now);
@@ -411,6 +417,7 @@ private:
     }
     if (!triggersFlow(now))  // else the steps follow the inputs and carry the exchange
       publishExchange();
+    return gap;
   }
 
   /// Energy exchange with the peer tank (pout, ereq) and the energy: what was sent since the last
@@ -463,6 +470,7 @@ private:
     s.add("output rate [Hz]", published_.rate());
     s.add("received", received_);
     s.add("rejected", rejected_);
+    s.add("timer", timer_->describe());
     if (Traits::kGateForce)
       s.add("contact force violations", violations);
   }
@@ -474,7 +482,7 @@ private:
   std::vector<Port> ports_;
   ros::Subscriber pin_sub_, ereq_sub_;
   ros::Publisher pout_pub_, ereq_pub_, energy_pub_;
-  ros::SteadyTimer timer_;
+  std::unique_ptr<PacedTimer> timer_;  // ~rate; ~watchdog_rate while every channel's trigger flows
   std::vector<bool> cycle_;  // channels stepped since the last exchange (while every trigger flows)
   std_msgs::Float32 pout_msg_, ereq_msg_;
   std_msgs::Float64 energy_msg_;

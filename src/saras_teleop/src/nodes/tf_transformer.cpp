@@ -10,8 +10,9 @@
  * force acts at the stylus), saturated to ~max_force and published as wrench_cmd at once.
  * A ~rate timer republishes the command (zero if tank_wrench is older than ~wrench_timeout), waits
  * for the frames at start-up (clear error after ~wait_timeout, keeps waiting) and declares the
- * master STALE if no new sample arrived within ~stale_timeout (twist cleared).
- * Params: reference_frame, tracked_frame, device_base_frame, rate [Hz], low_pass_cutoff [Hz],
+ * master STALE if no new sample arrived within ~stale_timeout (twist cleared); while samples and
+ * commands flow it runs at ~watchdog_rate instead (PacedTimer, node_common.h).
+ * Params: reference_frame, tracked_frame, device_base_frame, rate [Hz], watchdog_rate [Hz], low_pass_cutoff [Hz],
  * wait_timeout [s], stale_timeout [s], wrench_timeout [s], max_force [N], max_torque [N m].
  */
 #include <cmath>
@@ -58,6 +59,7 @@ public:
       dynamic_frames_.insert(f);
     const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
+    const double watchdog = prm.number("watchdog_rate", 100.0, "Hz", { positive() });
     wait_timeout_ = prm.number("wait_timeout", 10.0, "s", { positive() });
     stale_timeout_ = prm.number("stale_timeout", 0.05, "s", { positive() });
     wrench_timeout_ = prm.number("wrench_timeout", 0.05, "s", { positive() });
@@ -80,7 +82,7 @@ public:
     tf_static_sub_ = nh.subscribe("/tf_static", 100, &TfTransformerNode::onTfStatic, this, fast);
     wrench_sub_ = nh.subscribe("tank_wrench", 10, &TfTransformerNode::onWrench, this, fast);
     start_ = ros::Time::now();
-    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TfTransformerNode::onTimer, this);
+    timer_.reset(new PacedTimer(nh, period_, 1.0 / watchdog, [this](const ros::Time& now) { return onTimer(now); }));
     health_.reset(new Health(nh, pnh, name, "master tracking",
                              [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
@@ -239,9 +241,9 @@ private:
     t_wrench_pub_ = ros::Time::now();
   }
 
-  void onTimer(const ros::SteadyTimerEvent&)
+  /// PacedTimer tick: true if a stream stopped (no master sample or no command for 1.5 periods)
+  bool onTimer(const ros::Time& now)
   {
-    const ros::Time now = ros::Time::now();
     if (!ready())
     {
       if ((now - start_).toSec() > wait_timeout_)
@@ -250,7 +252,7 @@ private:
                                           "(is the touchball receiver running and world_frames published?)",
                            device_base_.c_str(), reference_.c_str(), tracked_.c_str(), (now - start_).toSec());
       }
-      return;
+      return true;
     }
     const bool stale = sampleAge(now) > stale_timeout_;
     if (stale && est_.twist().norm() > 0.0)
@@ -260,8 +262,13 @@ private:
     }
     if (t_wrench_.isZero() || (now - t_wrench_).toSec() > wrench_timeout_)
       w_ref_.setZero();  // no fresh command: no force
+    bool gap = sampleAge(now) > 1.5 * period_;
     if (t_wrench_pub_.isZero() || (now - t_wrench_pub_).toSec() > 1.5 * period_)
+    {
       publishWrench(ros::Time());
+      gap = true;
+    }
+    return gap;
   }
 
   /// [s] since the last new master sample (1e6 if none yet)
@@ -289,6 +296,7 @@ private:
     s.add("wrench_cmd rate [Hz]", wrench_rate_.rate());
     s.add("received", received_);
     s.add("rejected", rejected_);
+    s.add("timer", timer_->describe());
   }
 
   tf2::BufferCore buffer_;
@@ -308,7 +316,7 @@ private:
   ros::Publisher pose_pub_, twist_pub_, wrench_pub_;
   ros::Subscriber tf_sub_, tf_static_sub_, wrench_sub_;
   std::set<std::string> dynamic_frames_;  ///< child frames taken from /tf (the rest is skipped)
-  ros::SteadyTimer timer_;
+  std::unique_ptr<PacedTimer> timer_;  ///< fill-in and supervision (~rate; ~watchdog_rate while samples flow)
   ros::Time start_, last_sample_wall_, t_wrench_, t_wrench_pub_;
   uint64_t received_ = 0, rejected_ = 0;
 };

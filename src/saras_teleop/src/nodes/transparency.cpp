@@ -11,8 +11,9 @@
  * pub c/des_wrench (WrenchStamped), c/des_twist (TwistStamped), both in mesa_<c>/sbs_world.
  * Computes a channel when its master twist arrives (event-driven, stamps propagated); a ~rate
  * timer recomputes a channel whose twists stopped and publishes zero set-points once it holds
- * (inputs older than ~input_timeout, clutch, link STALE).
- * Params: pose_error_gain [N/m], scale_factor, rotation_scale, max_force [N], rate [Hz],
+ * (inputs older than ~input_timeout, clutch, link STALE); while every channel's twists flow the
+ * timer runs at ~watchdog_rate instead (PacedTimer, node_common.h).
+ * Params: pose_error_gain [N/m], scale_factor, rotation_scale, max_force [N], rate [Hz], watchdog_rate [Hz],
  * input_timeout [s] (master/slave inputs older than this => hold), fixture_timeout [s],
  * contact_feedback (bool), contact_force_scale [-], contact_timeout [s] (older contact force => zero).
  */
@@ -56,6 +57,7 @@ public:
     contact_feedback_ = p.contact_feedback;
     const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
+    const double watchdog = prm.number("watchdog_rate", 100.0, "Hz", { positive() });
     input_timeout_ = prm.number("input_timeout", 0.1, "s", { positive() });
     fixture_timeout_ = prm.number("fixture_timeout", 0.2, "s", { positive() });
     contact_timeout_ = prm.number("contact_timeout", 0.2, "s", { positive() });
@@ -103,7 +105,7 @@ public:
             ros::VoidConstPtr(), fast));
     }
     link_sub_ = nh.subscribe("link_status", 10, &TransparencyNode::onLinkStatus, this, fast);
-    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &TransparencyNode::onTimer, this);
+    timer_.reset(new PacedTimer(nh, period_, 1.0 / watchdog, [this](const ros::Time& now) { return onTimer(now); }));
     health_.reset(new Health(nh, pnh, name, "transparency",
                              [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
@@ -217,15 +219,20 @@ private:
     c.t_last = now;
   }
 
-  void onTimer(const ros::SteadyTimerEvent&)
+  /// PacedTimer tick: true if a channel's master twists stopped (it was computed here)
+  bool onTimer(const ros::Time& now)
   {
-    const ros::Time now = ros::Time::now();
+    bool gap = false;
     for (std::size_t i = 0; i < ch_.size(); ++i)
     {
       Channel& c = ch_[i];
       if (c.t_last.isZero() || (now - c.t_last).toSec() > 1.5 * period_)
+      {
         compute(i, ros::Time(), true);  // master twist stopped: hold (fresh == false) or keep waiting
+        gap = true;
+      }
     }
+    return gap;
   }
 
   /// /diagnostics (Health, 1 Hz): the worst channel state sets the level; each channel's state listed.
@@ -264,12 +271,13 @@ private:
     s.add("contact force feedback", contact_feedback_);
     s.add("received", received_);
     s.add("rejected", rejected_);
+    s.add("timer", timer_->describe());
   }
 
   static constexpr std::size_t kPoolSize = 16;  // > subscriber queue sizes (10)
   std::vector<Channel> ch_;
   ros::Subscriber link_sub_;
-  ros::SteadyTimer timer_;
+  std::unique_ptr<PacedTimer> timer_;  ///< fill-in (~rate; ~watchdog_rate while every channel's twists flow)
   std::unique_ptr<Health> health_;  // /diagnostics, created at the end of the constructor
   RateMeter published_;             // des_twist + des_wrench pairs, all channels
   double period_ = 0.001, input_timeout_ = 0.1, fixture_timeout_ = 0.2, contact_timeout_ = 0.2;

@@ -11,7 +11,8 @@
  * whenever messages bunch up). A stamp that does not advance, or advances by more than ~max_step,
  * is not integrated (restart). The set-point is published at once on target_pose (PoseStamped in
  * ~frame_id, stamp of the twist) and every ~tf_decimation-th time as TF ~frame_id -> ~setpoint_frame.
- * A ~rate timer republishes the held set-point if twists stop. Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
+ * A ~rate timer republishes the held set-point if twists stop and supervises the inputs below;
+ * while twists flow it runs at ~watchdog_rate instead (PacedTimer, node_common.h). Holds (set-point frozen) when link_status (ComponentStatus) is STALE or
  * the last twist is older than ~input_timeout. Velocity and workspace limits from parameters:
  * max_linear_velocity [m/s], max_angular_velocity [rad/s], workspace_min/max [m] (3 values each).
  *
@@ -99,6 +100,7 @@ public:
     const saras_common::Params prm(pnh);
     const double rate = prm.number("rate", 1000.0, "Hz", { positive() });
     period_ = 1.0 / rate;
+    const double watchdog = prm.number("watchdog_rate", 100.0, "Hz", { positive() });
     start_timeout_ = prm.number("start_timeout", 10.0, "s", { positive() });
     input_timeout_ = prm.number("input_timeout", 0.05, "s", { positive() });
     max_step_ = prm.number("max_step", 0.05, "s", { positive() });
@@ -134,7 +136,7 @@ public:
     collision_sub_ = nh.subscribe("collision_report", 2, &VelocityIntegratorNode::onCollision, this);
     jaw_.reset(new JawChannel(nh, pnh, max_step_, [this] { return hold_ || !vi_.commanding(); }));
     t0_ = ros::Time::now();
-    timer_ = nh.createSteadyTimer(ros::WallDuration(period_), &VelocityIntegratorNode::onTimer, this);
+    timer_.reset(new PacedTimer(nh, period_, 1.0 / watchdog, [this](const ros::Time& now) { return onTimer(now); }));
     health_.reset(new Health(nh, pnh, name, "set-point",
                              [this](diagnostic_updater::DiagnosticStatusWrapper& s) { report(s); }));
   }
@@ -330,9 +332,9 @@ private:
     }
   }
 
-  void onTimer(const ros::SteadyTimerEvent&)
+  /// PacedTimer tick: true if the twist stream stopped (the held set-point was republished) or not started
+  bool onTimer(const ros::Time& now)
   {
-    const ros::Time now = ros::Time::now();
     if (!vi_.started())
     {
       const double waited = (now - t0_).toSec();
@@ -341,13 +343,17 @@ private:
         ROS_ERROR_THROTTLE(start_timeout_, "velocity_integrator: no slave start pose on %s after %.1f s; not commanding",
                            start_sub_.getTopic().c_str(), waited);
       }
-      return;
+      return true;
     }
     if (t_twist_.isZero() || (now - t_twist_).toSec() > input_timeout_)
       hold_ = true;  // no twist stream: the set-point is frozen
     supervise(now);
     if (t_pub_.isZero() || (now - t_pub_).toSec() > 1.5 * period_)
+    {
       publish(ros::Time());
+      return true;
+    }
+    return false;
   }
 
   /// /diagnostics (Health, 1 Hz)
@@ -382,6 +388,7 @@ private:
     s.add("speed scale", vi_.speedScale());
     s.add("received", received_);
     s.add("rejected", rejected_);
+    s.add("timer", timer_->describe());
     jaw_->report(s);
   }
 
@@ -410,7 +417,7 @@ private:
   std_msgs::Bool hold_msg_;
   bool held_ = false, hold_sent_ = false;
   ros::Subscriber start_sub_, twist_sub_, link_sub_, arm_link_sub_, gate_sub_, device_sub_, collision_sub_;
-  ros::SteadyTimer timer_;
+  std::unique_ptr<PacedTimer> timer_;  ///< fill-in and supervision (~rate; ~watchdog_rate while twists flow)
   ros::Time t0_, t_twist_, t_pub_, last_stamp_, t_measured_, t_collision_;
   uint64_t received_ = 0, rejected_ = 0;
 };
