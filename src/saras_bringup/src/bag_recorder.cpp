@@ -52,15 +52,10 @@ namespace
 {
 struct Options
 {
-  std::string output;
-  std::size_t buffer_mb = 1024;  ///< [MB] writer queue budget
-  std::uint32_t chunk_kb = 768;  ///< [kB] bag chunk size
+  BagWriterOptions bag;          ///< output, buffer, chunk, min free space, split (bag_writer.h)
   std::uint32_t queue = 2000;    ///< [messages] per-topic subscription queue
   bool tcp_nodelay = false;
   double duration = 0.0;  ///< [s] 0 = until SIGINT
-  std::size_t min_free_mb = 64;   ///< [MB] stop writing below this much free space
-  std::size_t split_mb = 0;       ///< [MB] 0 = one bag
-  double split_duration = 0.0;    ///< [s] 0 = one bag
   std::vector<std::string> topics;
 };
 
@@ -91,18 +86,18 @@ bool parseOptions(int argc, char** argv, Options& o)
       return true;
     };
     if (a == "-O" && has_value)
-      o.output = argv[++i];
+      o.bag.output = argv[++i];
     else if (a == "--buffsize")
     {
       if (!value(a, 1, 65536))
         return false;
-      o.buffer_mb = v;
+      o.bag.buffer_mb = v;
     }
     else if (a == "--chunksize")
     {
       if (!value(a, 1, 1048576))
         return false;
-      o.chunk_kb = static_cast<std::uint32_t>(v);
+      o.bag.chunk_kb = static_cast<std::uint32_t>(v);
     }
     else if (a == "--queue")
     {
@@ -114,18 +109,18 @@ bool parseOptions(int argc, char** argv, Options& o)
     {
       if (!value(a, 1, 1048576))
         return false;
-      o.min_free_mb = v;
+      o.bag.min_free_mb = v;
     }
     else if (a == "--split-size")
     {
       if (!value(a, 1, 1048576))
         return false;
-      o.split_mb = v;
+      o.bag.split_mb = v;
     }
     else if ((a == "--duration" || a == "--split-duration") && has_value)
     {
       char* end = nullptr;
-      double& d = a == "--duration" ? o.duration : o.split_duration;
+      double& d = a == "--duration" ? o.duration : o.bag.split_duration;
       d = std::strtod(argv[++i], &end);
       if (*end != '\0' || !(d > 0.0 && d < 1e7))
       {
@@ -143,7 +138,7 @@ bool parseOptions(int argc, char** argv, Options& o)
       return false;
     }
   }
-  if (o.output.empty() || o.topics.empty())
+  if (o.bag.output.empty() || o.topics.empty())
   {
     std::fprintf(stderr, "usage: bag_recorder -O out.bag [--buffsize MB] [--chunksize KB] [--queue N] "
                          "[--tcpnodelay] [--duration S] [--min-free MB] [--split-size MB] [--split-duration S] "
@@ -160,7 +155,7 @@ bool parseOptions(int argc, char** argv, Options& o)
 class BagRecorder
 {
 public:
-  explicit BagRecorder(const Options& o) : options_(o), writer_(writerOptions(o), o.topics) {}
+  explicit BagRecorder(const Options& o) : options_(o), writer_(o.bag, o.topics) {}
 
   /// Opens the bag and subscribes; throws rosbag::BagException when the bag cannot be opened.
   void start()
@@ -188,8 +183,8 @@ public:
     }
     ROS_INFO("bag_recorder: recording %zu topics to %s (queue %u per topic, buffer %zu MB, stops below %zu MB free "
              "on %s)",
-             options_.topics.size(), options_.output.c_str(), options_.queue, options_.buffer_mb,
-             options_.min_free_mb, writer_.filesystem().c_str());
+             options_.topics.size(), options_.bag.output.c_str(), options_.queue, options_.bag.buffer_mb,
+             options_.bag.min_free_mb, writer_.filesystem().c_str());
   }
 
   /// Unsubscribes, writes what is queued, closes and renames the bag. False on a write error or a
@@ -203,18 +198,6 @@ public:
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) { writer_.diagnose(stat); }
 
 private:
-  static BagWriterOptions writerOptions(const Options& o)
-  {
-    BagWriterOptions w;
-    w.output = o.output;
-    w.buffer_mb = o.buffer_mb;
-    w.chunk_kb = o.chunk_kb;
-    w.min_free_mb = o.min_free_mb;
-    w.split_mb = o.split_mb;
-    w.split_duration = o.split_duration;
-    return w;
-  }
-
   const Options options_;
   BagWriter writer_;
   saras_common::InlineCallbackQueue callbacks_;  ///< callbacks run in roscpp's poll thread: no hand-off
@@ -283,7 +266,7 @@ int main(int argc, char** argv)
   }
   catch (const rosbag::BagException& e)
   {
-    ROS_FATAL("bag_recorder: cannot open %s.active: %s", options.output.c_str(), e.what());
+    ROS_FATAL("bag_recorder: cannot open %s.active: %s", options.bag.output.c_str(), e.what());
     return 1;
   }
   diagnostic_updater::Updater updater;

@@ -71,7 +71,7 @@ std::size_t bytesOf(const Outgoing& out)
 BagWriter::BagWriter(const BagWriterOptions& o, const std::vector<std::string>& topics)
   : options_(o)
   , topics_(topics)
-  , types_(topics.size())
+  , shifters_(topics.size())
   , queue_(o.buffer_mb * 1024 * 1024, std::min<std::size_t>(kWakeBytes, o.buffer_mb * 1024 * 1024 / 8))
   , counts_(topics.size())
   , seqs_(topics.size())
@@ -288,11 +288,10 @@ void BagWriter::write(Outgoing& out)
     bag_.write(topic, out.time, *out.msg, out.header);
     return;
   }
-  const TypeInfo& t = types_[out.topic];
-  shifter_.morph(t.md5, t.datatype, t.definition, "0");
+  topic_tools::ShapeShifter& shifter = shifters_[out.topic];
   ros::serialization::IStream stream(out.bytes.data(), static_cast<std::uint32_t>(out.bytes.size()));
-  shifter_.read(stream);
-  bag_.write(topic, out.time, shifter_, out.header);
+  shifter.read(stream);
+  bag_.write(topic, out.time, shifter, out.header);
   giveBuffer(std::move(out.bytes));
 }
 

@@ -80,10 +80,8 @@ public:
   template <class M>
   void setType(std::size_t topic)
   {
-    TypeInfo& t = types_.at(topic);
-    t.md5 = ros::message_traits::md5sum<M>();
-    t.datatype = ros::message_traits::datatype<M>();
-    t.definition = ros::message_traits::definition<M>();
+    shifters_.at(topic).morph(ros::message_traits::md5sum<M>(), ros::message_traits::datatype<M>(),
+                              ros::message_traits::definition<M>(), "0");
   }
 
   /// Serialises a typed message into a pooled buffer and queues it (any thread, never blocks).
@@ -117,11 +115,6 @@ public:
   const std::vector<std::string>& topics() const { return topics_; }
 
 private:
-  struct TypeInfo
-  {
-    std::string md5, datatype, definition;
-  };
-
   void enqueue(Outgoing&& out);
   std::vector<std::uint8_t> takeBuffer();
   void giveBuffer(std::vector<std::uint8_t>&& buffer);
@@ -137,11 +130,11 @@ private:
 
   const BagWriterOptions options_;
   const std::vector<std::string> topics_;
-  std::vector<TypeInfo> types_;
+  std::vector<topic_tools::ShapeShifter> shifters_;  ///< per typed topic, morphed once (setType): the bag's
+                                                     ///< input for its serialised messages (writer thread)
   BoundedQueue<Outgoing> queue_;
   std::mutex buffers_mutex_;
   std::vector<std::vector<std::uint8_t>> buffers_;  ///< free list of serialisation buffers
-  topic_tools::ShapeShifter shifter_;               ///< writer thread: a typed message as the bag's input
   rosbag::Bag bag_;
   std::string path_, active_path_;
   unsigned part_ = 0;

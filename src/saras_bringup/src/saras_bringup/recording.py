@@ -164,11 +164,15 @@ def recorder_command(config, output, extra_topics=(), in_process=True):
             + topics + list(extra_topics))
 
 
+def _stem(output):
+    """``/x/platform.bag`` -> ``/x/platform``."""
+    return output[:-len('.bag')] if output.endswith('.bag') else output
+
+
 def part_path(output, part):
     """The part bag ``part`` of the recording whose main bag is ``output``:
     ``/x/platform.bag`` -> ``/x/platform.<part>.bag``."""
-    stem = output[:-len('.bag')] if output.endswith('.bag') else output
-    return '%s.%s.bag' % (stem, part)
+    return '%s.%s.bag' % (_stem(output), part)
 
 
 def stream_recorder_command(config, output, node_name):
@@ -193,8 +197,7 @@ def recording_bags(output, config=None):
     if config is not None:
         parts = [part_path(output, config.in_process_part)] if config.in_process_part else []
     else:
-        stem = output[:-len('.bag')] if output.endswith('.bag') else output
-        parts = sorted(glob.glob(glob.escape(stem) + '.*.bag'))
+        parts = sorted(glob.glob(glob.escape(_stem(output)) + '.*.bag'))
     return [output] + [p for p in parts if os.path.isfile(p) and p != output]
 
 

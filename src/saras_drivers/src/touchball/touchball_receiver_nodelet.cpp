@@ -215,6 +215,7 @@ private:
     {
       pub_tf_ = nh.advertise<tf2_msgs::TFMessage>("/tf", qs);
       pub_tf_all_ = nh.advertise<tf2_msgs::TFMessage>(ns + "touchball/tf", qs);
+      tf_period_ = ros::Duration(cfg_.tf_rate > 0.0 ? 1.0 / cfg_.tf_rate : 0.0);
     }
     pub_status_ = nh.advertise<saras_msgs::ComponentStatus>(ns + "touchball/status", 10);
   }
@@ -360,13 +361,13 @@ private:
       t.transform.rotation.w = d.orientation[3];
     }
     pub_tf_all_.publish(m);
-    if (cfg_.tf_rate > 0.0 && stamp < next_tf_)
+    if (stamp < next_tf_)
       return;
     pub_tf_.publish(m);
-    // next /tf at the following multiple of the period (no catch-up burst after a gap)
-    next_tf_ += ros::Duration(cfg_.tf_rate > 0.0 ? 1.0 / cfg_.tf_rate : 0.0);
+    // next /tf one period later (no catch-up burst after a gap); period 0 (tf_rate 0): every packet
+    next_tf_ += tf_period_;
     if (next_tf_ <= stamp)
-      next_tf_ = stamp + ros::Duration(cfg_.tf_rate > 0.0 ? 1.0 / cfg_.tf_rate : 0.0);
+      next_tf_ = stamp + tf_period_;
   }
 
   void sendCommand(const Endpoint& src)
@@ -520,7 +521,8 @@ private:
   std::array<Side, kDevices> sides_;
   std::unique_ptr<saras_common::MessagePool<tf2_msgs::TFMessage>> tf_;
   ros::Publisher pub_tf_, pub_tf_all_, pub_status_;
-  ros::Time next_tf_;  ///< receive thread: stamp from which the next stylus TF goes to /tf
+  ros::Time next_tf_;     ///< receive thread: stamp from which the next stylus TF goes to /tf
+  ros::Duration tf_period_;  ///< 1 / ~tf_rate (0: every packet), set at start-up
   ros::SteadyTimer status_timer_, js_timer_;
   // receive thread only:
   std::thread thread_;

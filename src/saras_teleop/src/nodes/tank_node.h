@@ -386,23 +386,24 @@ private:
       publishExchange();
   }
 
-  /// Every channel's trigger input stepped the tank within the last kFlowPeriods periods (inputs a
-  /// few periods late on a loaded host still flow: their next cycle carries the exchange, exactly).
-  bool triggersFlow(const ros::Time& now) const
+  /// Every channel's trigger input stepped the tank within the last @p periods periods.
+  bool triggeredWithin(const ros::Time& now, double periods) const
   {
     for (const Port& pt : ports_)
-      if (pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > kFlowPeriods * period_)
+      if (pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > periods * period_)
         return false;
     return true;
   }
+
+  /// The triggers flow: inputs a few periods late on a loaded host still do (their next cycle
+  /// carries the exchange, exactly).
+  bool triggersFlow(const ros::Time& now) const { return triggeredWithin(now, kFlowPeriods); }
 
   /// PacedTimer tick: true if a channel's trigger is older than 1.5 periods (the timer then runs at
   /// ~rate: it steps the tank when no trigger came and carries the exchange while one is missing)
   bool onTimer(const ros::Time& now)
   {
-    bool gap = false;
-    for (const Port& pt : ports_)
-      gap = gap || pt.t_trigger.isZero() || (now - pt.t_trigger).toSec() > 1.5 * period_;
+    const bool gap = !triggeredWithin(now, 1.5);
     if (last_trigger_.isZero() || (now - last_trigger_).toSec() > 1.5 * period_)
     {
       step(now);
@@ -475,8 +476,8 @@ private:
       s.add("contact force violations", violations);
   }
 
-  static constexpr std::size_t kPoolSize = 16;
-  static constexpr double kFlowPeriods = 10.0;  // triggersFlow() window [periods]  // > subscriber queue sizes (10)
+  static constexpr std::size_t kPoolSize = 16;   // > subscriber queue sizes (10)
+  static constexpr double kFlowPeriods = 10.0;  // triggersFlow() window [periods]
   std::unique_ptr<EnergyTank> tank_;
   EnergyJournal journal_;  // the energy after every step, for a restart
   std::vector<Port> ports_;
